@@ -1,0 +1,853 @@
+//! Block Gauss-Seidel for many coupled frictional contacts (Sec. 3.2, eqs.
+//! 8-10), solved one contact at a time as in Daviet et al. (the paper's refs.
+//! [22, 25]) without forming the Delassus matrix `W = dt H^T M^-1 H`.
+//!
+//! Contact `c` joins the closest points `C_a = (1 - s) x_a0 + s x_a1` and
+//! `C_b = (1 - t) x_b0 + t x_b1`; its relative velocity is
+//! `u_c = sum_k w_ck v_k` with weights `(1 - s, s, -(1 - t), -t)` on nodes
+//! `(a0, a1, b0, b1)`, expressed in the frame `(n, t1, t2)` with `n` from B to
+//! A. A force `F_c` (on A; B receives `-F_c`), constant over the step, changes
+//! node `k`'s velocity by `dt inv_mass_k w_ck F_c`. With a lumped isotropic
+//! mass every diagonal block of `W` is `w_c I`, so each local problem is
+//! solved exactly by [`solve_isotropic`].
+
+use super::cone::{ContactFrame, natural_map_residual, solve_isotropic};
+use super::segment::SegmentPair;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// One contact between two segments.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ContactPoint {
+    /// Global node ids `(a0, a1, b0, b1)`.
+    pub nodes: [usize; 4],
+    /// Signed barycentric weights `(1 - s, s, -(1 - t), -t)`.
+    pub weights: [f64; 4],
+    /// Unit normal `(C_a - C_b) / d`, from B to A.
+    pub normal: Vector3<f64>,
+    /// Gap `d - (r_a + r_b)` of eq. (8), negative when penetrating.
+    pub gap: f64,
+    /// Friction coefficient `mu >= 0`.
+    pub mu: f64,
+}
+
+impl ContactPoint {
+    /// Contact from the closest points of segments `[a0, a1]` (A) and
+    /// `[b0, b1]` (B) (see [`super::segment::closest_points`]), with
+    /// `contact_distance = r_a + r_b`; `None` when the centre lines (nearly)
+    /// touch, `d <= MIN_NORMAL_DISTANCE * contact_distance` (or `d = 0`), where
+    /// the normal is undefined.
+    pub fn from_pair(
+        nodes: [usize; 4],
+        closest: &SegmentPair,
+        contact_distance: f64,
+        mu: f64,
+    ) -> Option<Self> {
+        let d = closest.distance;
+        (d > 0.0 && d > MIN_NORMAL_DISTANCE * contact_distance).then(|| Self {
+            nodes,
+            weights: [1.0 - closest.s, closest.s, closest.t - 1.0, -closest.t],
+            normal: (closest.point_a - closest.point_b) / d,
+            gap: d - contact_distance,
+            mu,
+        })
+    }
+}
+
+/// Relative centre-line distance below which [`ContactPoint::from_pair`] gives
+/// no contact (normal direction lost in rounding).
+pub const MIN_NORMAL_DISTANCE: f64 = 1e-9;
+
+/// Stopping rule and gap treatment.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GaussSeidelOptions {
+    /// Sweep cap.
+    pub max_sweeps: usize,
+    /// Stop when the largest force change over a sweep, or the natural-map
+    /// residual of [`SolveReport::residual`] (checked every 8 sweeps), is at
+    /// most `tolerance` times the largest contact force.
+    pub tolerance: f64,
+    /// `true`: the free normal velocity gets `gap / dt`, so positive gaps may
+    /// close and penetrations are removed within the step. `false`: only
+    /// positive gaps are credited (`max(gap, 0) / dt`) and penetration is not
+    /// pushed out (pure velocity-level Signorini).
+    pub close_gap: bool,
+}
+
+impl Default for GaussSeidelOptions {
+    fn default() -> Self {
+        Self {
+            max_sweeps: 200,
+            tolerance: 1e-8,
+            close_gap: true,
+        }
+    }
+}
+
+/// Outcome of [`GaussSeidel::solve`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SolveReport {
+    /// Sweeps performed.
+    pub sweeps: usize,
+    /// Final natural-map residual: `max_c || r_c - P_K(r_c - u_hat_c / w_c) ||`
+    /// over the largest `|r_c|` (zero at an exact solution of eqs. 8-9).
+    pub residual: f64,
+    /// Whether a stopping criterion was met before the sweep cap.
+    pub converged: bool,
+}
+
+/// Invalid Gauss-Seidel input.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ContactError {
+    /// `inv_mass` and `v_free` lengths differ.
+    #[error("{inv_mass} inverse masses but {v_free} free velocities")]
+    LengthMismatch {
+        /// `inv_mass.len()`.
+        inv_mass: usize,
+        /// `v_free.len()`.
+        v_free: usize,
+    },
+    /// A contact refers to a node that does not exist.
+    #[error("contact {contact} refers to node {node} of {nodes}")]
+    NodeOutOfRange {
+        /// Offending contact.
+        contact: usize,
+        /// Its node id.
+        node: usize,
+        /// Number of nodes.
+        nodes: usize,
+    },
+    /// A contact has a non-unit normal, a negative `mu` or non-finite data.
+    #[error("contact {0} has a non-unit normal, a negative friction coefficient or non-finite data")]
+    InvalidContact(usize),
+    /// A node has a negative or non-finite inverse mass or velocity.
+    #[error("node {0} has an invalid inverse mass or free velocity")]
+    InvalidNode(usize),
+    /// The time step is not positive and finite.
+    #[error("time step {0} is not positive and finite")]
+    InvalidTimeStep(f64),
+    /// A warm-start force is not finite.
+    #[error("warm-start force {0} is not finite")]
+    InvalidWarmStart(usize),
+    /// The warm start does not have one force per contact.
+    #[error("warm start has {got} forces for {expected} contacts")]
+    WarmStartLength {
+        /// Number of contacts.
+        expected: usize,
+        /// Number of warm-start forces.
+        got: usize,
+    },
+}
+
+/// Contact solver state; buffers are reused, so a solve allocates nothing once
+/// they have grown to the problem size.
+#[derive(Debug, Clone, Default)]
+pub struct GaussSeidel {
+    frames: Vec<ContactFrame>,
+    /// Isotropic diagonal blocks `w_c` of `W`.
+    delassus: Vec<f64>,
+    /// Local relative velocities of the free step, gap term included.
+    free: Vec<Vector3<f64>>,
+    /// Local contact forces `r_c = (r_n, r_t1, r_t2)`.
+    local: Vec<Vector3<f64>>,
+    /// Per-node velocity corrections `sum_c dt inv_mass_k w_ck F_c`.
+    dv: Vec<Vector3<f64>>,
+    forces: Vec<Vector3<f64>>,
+    node_forces: Vec<Vector3<f64>>,
+}
+
+/// Sweeps between checks of the natural-map residual (a pass costing about
+/// half a sweep).
+const RESIDUAL_EVERY: usize = 8;
+
+/// Tolerance on `|normal| - 1`.
+const NORMAL_TOL: f64 = 1e-9;
+
+impl GaussSeidel {
+    /// Empty solver.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Contact forces `F_c` (on body A, world coordinates) of the last solve.
+    pub fn contact_forces(&self) -> &[Vector3<f64>] {
+        &self.forces
+    }
+
+    /// Per-node contact forces `sum_c w_ck F_c` (the `F^fr` of eq. 7c) of the
+    /// last solve.
+    pub fn node_forces(&self) -> &[Vector3<f64>] {
+        &self.node_forces
+    }
+
+    /// Per-node velocity corrections of the last solve: the end-of-step
+    /// velocity is `v_free + correction`.
+    pub fn velocity_corrections(&self) -> &[Vector3<f64>] {
+        &self.dv
+    }
+
+    /// Solves eqs. (8)-(9) for all contacts given the contact-free velocities
+    /// `v_free`, optionally warm-started from world forces (one per contact).
+    pub fn solve(
+        &mut self,
+        contacts: &[ContactPoint],
+        inv_mass: &[f64],
+        v_free: &[Vector3<f64>],
+        dt: f64,
+        options: &GaussSeidelOptions,
+        warm_start: Option<&[Vector3<f64>]>,
+    ) -> Result<SolveReport, ContactError> {
+        validate(contacts, inv_mass, v_free, dt, warm_start)?;
+        let nodes = inv_mass.len();
+        self.dv.clear();
+        self.dv.resize(nodes, Vector3::zeros());
+        self.frames.clear();
+        self.delassus.clear();
+        self.free.clear();
+        self.local.clear();
+        for (c, contact) in contacts.iter().enumerate() {
+            let frame = ContactFrame::from_normal(&contact.normal);
+            let w = dt * self_block(contact, inv_mass);
+            let mut u = frame.to_local(&gather(contact, v_free));
+            u.x += if options.close_gap {
+                contact.gap
+            } else {
+                contact.gap.max(0.0)
+            } / dt;
+            let r = match warm_start {
+                Some(forces) if w > 0.0 => frame.to_local(&forces[c]),
+                _ => Vector3::zeros(),
+            };
+            scatter(contact, inv_mass, dt, &frame.to_world(&r), &mut self.dv);
+            self.frames.push(frame);
+            self.delassus.push(w);
+            self.free.push(u);
+            self.local.push(r);
+        }
+
+        let mut sweeps = 0;
+        let mut converged = false;
+        while sweeps < options.max_sweeps && !converged {
+            sweeps += 1;
+            let (mut max_change, mut max_force) = (0.0f64, 0.0f64);
+            for (c, contact) in contacts.iter().enumerate() {
+                let w = self.delassus[c];
+                if w == 0.0 {
+                    continue;
+                }
+                let frame = &self.frames[c];
+                let r_old = self.local[c];
+                let u = self.free[c] + frame.to_local(&gather(contact, &self.dv));
+                let r = solve_isotropic(&(u - w * r_old), w, contact.mu);
+                let change = frame.to_world(&(r - r_old));
+                scatter(contact, inv_mass, dt, &change, &mut self.dv);
+                self.local[c] = r;
+                max_change = max_change.max(change.norm());
+                max_force = max_force.max(r.norm());
+            }
+            converged = max_change <= options.tolerance * max_force
+                || (sweeps % RESIDUAL_EVERY == 0 && self.residual(contacts) <= options.tolerance);
+        }
+
+        self.forces.clear();
+        self.node_forces.clear();
+        self.node_forces.resize(nodes, Vector3::zeros());
+        for (c, contact) in contacts.iter().enumerate() {
+            let force = self.frames[c].to_world(&self.local[c]);
+            for (&k, &wk) in contact.nodes.iter().zip(&contact.weights) {
+                self.node_forces[k] += wk * force;
+            }
+            self.forces.push(force);
+        }
+        Ok(SolveReport {
+            sweeps,
+            residual: self.residual(contacts),
+            converged,
+        })
+    }
+
+    /// Natural-map residual of the current iterate, `max_c || r_c - P_K(r_c -
+    /// u_hat_c / w_c) ||` over `max_c |r_c|`, skipping contacts with `w_c = 0`
+    /// (they cannot act).
+    fn residual(&self, contacts: &[ContactPoint]) -> f64 {
+        let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
+        for (c, contact) in contacts.iter().enumerate() {
+            let (frame, r, w) = (&self.frames[c], &self.local[c], self.delassus[c]);
+            if w > 0.0 {
+                let u = self.free[c] + frame.to_local(&gather(contact, &self.dv));
+                max_residual = max_residual.max(natural_map_residual(r, &u, contact.mu, 1.0 / w));
+                max_force = max_force.max(r.norm());
+            }
+        }
+        max_residual / max_force.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// `sum_k w_ck x_k` over the contact's nodes.
+#[inline]
+fn gather(contact: &ContactPoint, x: &[Vector3<f64>]) -> Vector3<f64> {
+    contact
+        .nodes
+        .iter()
+        .zip(&contact.weights)
+        .fold(Vector3::zeros(), |acc, (&k, &wk)| acc + wk * x[k])
+}
+
+/// Adds the velocity change `dt inv_mass_k w_ck force` to the contact's nodes.
+#[inline]
+fn scatter(contact: &ContactPoint, inv_mass: &[f64], dt: f64, force: &Vector3<f64>, dv: &mut [Vector3<f64>]) {
+    for (&k, &wk) in contact.nodes.iter().zip(&contact.weights) {
+        dv[k] += (dt * inv_mass[k] * wk) * force;
+    }
+}
+
+/// `W_cc / dt = sum_{k, k'} [node_k = node_k'] w_ck w_ck' inv_mass_k`, exact
+/// even when a node appears twice in the contact.
+fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for (a, (&ka, &wa)) in contact.nodes.iter().zip(&contact.weights).enumerate() {
+        let same: f64 = contact.nodes[a..]
+            .iter()
+            .zip(&contact.weights[a..])
+            .filter(|&(&kb, _)| kb == ka)
+            .map(|(_, &wb)| wb)
+            .sum();
+        sum += inv_mass[ka] * wa * (2.0 * same - wa);
+    }
+    sum
+}
+
+fn validate(
+    contacts: &[ContactPoint],
+    inv_mass: &[f64],
+    v_free: &[Vector3<f64>],
+    dt: f64,
+    warm_start: Option<&[Vector3<f64>]>,
+) -> Result<(), ContactError> {
+    if inv_mass.len() != v_free.len() {
+        return Err(ContactError::LengthMismatch {
+            inv_mass: inv_mass.len(),
+            v_free: v_free.len(),
+        });
+    }
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(ContactError::InvalidTimeStep(dt));
+    }
+    if let Some(k) = (0..inv_mass.len()).find(|&k| {
+        !(inv_mass[k] >= 0.0 && inv_mass[k].is_finite() && v_free[k].iter().all(|x| x.is_finite()))
+    }) {
+        return Err(ContactError::InvalidNode(k));
+    }
+    for (c, contact) in contacts.iter().enumerate() {
+        if let Some(&node) = contact.nodes.iter().find(|&&k| k >= inv_mass.len()) {
+            return Err(ContactError::NodeOutOfRange {
+                contact: c,
+                node,
+                nodes: inv_mass.len(),
+            });
+        }
+        let finite = contact
+            .weights
+            .iter()
+            .chain(contact.normal.iter())
+            .all(|x| x.is_finite())
+            && contact.gap.is_finite();
+        let unit = (contact.normal.norm() - 1.0).abs() <= NORMAL_TOL;
+        if !(finite && unit && contact.mu >= 0.0 && contact.mu.is_finite()) {
+            return Err(ContactError::InvalidContact(c));
+        }
+    }
+    match warm_start {
+        Some(forces) if forces.len() != contacts.len() => Err(ContactError::WarmStartLength {
+            expected: contacts.len(),
+            got: forces.len(),
+        }),
+        Some(forces) => match forces.iter().position(|f| !f.iter().all(|x| x.is_finite())) {
+            Some(c) => Err(ContactError::InvalidWarmStart(c)),
+            None => Ok(()),
+        },
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::broad_phase::tests::{polyline_segments, torus_knot};
+    use crate::contact::broad_phase::{BroadPhase, neighbour_gap};
+    use crate::contact::cone::{solve_isotropic, tangential};
+    use crate::contact::segment::closest_points;
+    use rand::rngs::StdRng;
+    use rand::seq::SliceRandom;
+    use rand::{Rng, SeedableRng};
+
+    fn random_vector(rng: &mut StdRng, scale: f64) -> Vector3<f64> {
+        Vector3::new(
+            rng.gen_range(-scale..scale),
+            rng.gen_range(-scale..scale),
+            rng.gen_range(-scale..scale),
+        )
+    }
+
+    /// Contact between segments `(nodes[0], nodes[1])` (A) and
+    /// `(nodes[2], nodes[3])` (B) of the node array `x`.
+    fn contact(x: &[Vector3<f64>], nodes: [usize; 4], contact_distance: f64, mu: f64) -> ContactPoint {
+        let pair = closest_points(&x[nodes[0]], &x[nodes[1]], &x[nodes[2]], &x[nodes[3]]);
+        ContactPoint::from_pair(nodes, &pair, contact_distance, mu).unwrap()
+    }
+
+    /// Checks Signorini and Coulomb (eqs. 8-9) at every contact of the last
+    /// solve, with tolerances relative to the largest force and velocity.
+    fn assert_solution(gs: &GaussSeidel, contacts: &[ContactPoint], tol: f64) {
+        let f_max = gs.local.iter().fold(0.0f64, |m, r| m.max(r.norm())).max(1e-300);
+        let u_max = gs.free.iter().fold(0.0f64, |m, u| m.max(u.norm())).max(1e-300);
+        for (c, contact) in contacts.iter().enumerate() {
+            let r = gs.local[c];
+            let u = gs.free[c] + gs.frames[c].to_local(&gather(contact, &gs.dv));
+            let (rt, ut) = (tangential(&r), tangential(&u));
+            let mu = contact.mu;
+            assert!(r.x >= 0.0 && u.x >= -tol * u_max, "contact {c}: r {r:?} u {u:?}");
+            assert!(
+                r.x.min(u.x / u_max * f_max) <= tol * f_max,
+                "contact {c}: complementarity r {r:?} u {u:?}"
+            );
+            assert!(
+                rt.norm() <= mu * r.x * (1.0 + 1e-12) + 1e-300,
+                "contact {c}: outside the cone"
+            );
+            if ut.norm() > tol * u_max {
+                let slide = rt + mu * r.x * ut / ut.norm();
+                assert!(
+                    slide.norm() <= tol * f_max,
+                    "contact {c}: r {r:?} does not oppose sliding u {u:?}"
+                );
+            }
+        }
+    }
+
+    fn total_momentum(inv_mass: &[f64], v: &[Vector3<f64>]) -> Vector3<f64> {
+        inv_mass.iter().zip(v).map(|(&im, v)| v / im).sum()
+    }
+
+    fn end_velocities(gs: &GaussSeidel, v_free: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        v_free
+            .iter()
+            .zip(gs.velocity_corrections())
+            .map(|(v, dv)| v + dv)
+            .collect()
+    }
+
+    #[test]
+    fn from_pair_weights_and_normal() {
+        let x = [
+            Vector3::new(-1.0, 0.0, 0.5),
+            Vector3::new(3.0, 0.0, 0.5),
+            Vector3::new(0.0, -1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let c = contact(&x, [0, 1, 2, 3], 0.4, 0.2);
+        assert_eq!(c.weights, [0.75, 0.25, -0.5, -0.5]);
+        assert!((c.normal - Vector3::z()).norm() < 1e-15 && (c.gap - 0.1).abs() < 1e-15);
+        assert!(c.weights.iter().sum::<f64>().abs() < 1e-15);
+        let touching = closest_points(&x[0], &x[1], &x[0], &x[3]);
+        assert!(ContactPoint::from_pair([0, 1, 0, 3], &touching, 0.4, 0.2).is_none());
+    }
+
+    #[test]
+    fn single_contact_on_fixed_body_matches_analytic() {
+        let mut rng = StdRng::seed_from_u64(20);
+        let mut gs = GaussSeidel::new();
+        for _ in 0..500 {
+            let x: Vec<_> = [
+                (0.0, 0.0, 0.3),
+                (1.0, 0.2, 0.3),
+                (0.4, -1.0, 0.0),
+                (0.5, 1.0, 0.0),
+            ]
+            .iter()
+            .map(|&(a, b, c)| Vector3::new(a, b, c) + random_vector(&mut rng, 0.05))
+            .collect();
+            let mu = rng.gen_range(0.0..1.0);
+            let c = contact(&x, [0, 1, 2, 3], 0.3, mu);
+            let inv_mass = [rng.gen_range(0.5..2.0), rng.gen_range(0.5..2.0), 0.0, 0.0];
+            let v_free: Vec<_> = (0..4).map(|_| random_vector(&mut rng, 1.0)).collect();
+            let dt = 1e-2;
+            let close_gap = rng.gen_bool(0.5);
+            let options = GaussSeidelOptions {
+                close_gap,
+                ..Default::default()
+            };
+            let report = gs.solve(&[c], &inv_mass, &v_free, dt, &options, None).unwrap();
+
+            let frame = ContactFrame::from_normal(&c.normal);
+            let w = dt * (c.weights[0].powi(2) * inv_mass[0] + c.weights[1].powi(2) * inv_mass[1]);
+            let mut u0 = frame.to_local(&(0..4).map(|k| c.weights[k] * v_free[k]).sum::<Vector3<f64>>());
+            u0.x += if close_gap { c.gap } else { c.gap.max(0.0) } / dt;
+            let expected = frame.to_world(&solve_isotropic(&u0, w, mu));
+            let force = gs.contact_forces()[0];
+            assert!((force - expected).norm() <= 1e-12 * (1.0 + expected.norm()));
+            assert!(
+                report.converged && report.sweeps <= 2 && report.residual <= 1e-12,
+                "{report:?}"
+            );
+            for k in 0..4 {
+                assert!((gs.node_forces()[k] - c.weights[k] * force).norm() <= 1e-15 * (1.0 + force.norm()));
+            }
+            assert_eq!(&gs.velocity_corrections()[2..], &[Vector3::zeros(); 2]);
+            assert_solution(&gs, &[c], 1e-12);
+        }
+    }
+
+    #[test]
+    fn head_on_frictionless_conserves_momentum() {
+        let mut rng = StdRng::seed_from_u64(21);
+        let mut gs = GaussSeidel::new();
+        for _ in 0..200 {
+            let r = 0.1;
+            let x = [
+                Vector3::new(-1.0, 0.3, r),
+                Vector3::new(1.0, 0.3, r),
+                Vector3::new(0.2, -1.0, -r),
+                Vector3::new(0.2, 1.0, -r),
+            ];
+            let c = contact(&x, [0, 1, 2, 3], 2.0 * r, 0.0);
+            let inv_mass: Vec<f64> = (0..4).map(|_| 1.0 / rng.gen_range(0.5..3.0)).collect();
+            let mut v_free: Vec<_> = (0..4).map(|_| random_vector(&mut rng, 0.5)).collect();
+            v_free[0].z -= 2.0;
+            v_free[1].z -= 2.0;
+            v_free[2].z += 1.0;
+            v_free[3].z += 1.0;
+            let report = gs
+                .solve(&[c], &inv_mass, &v_free, 1e-3, &Default::default(), None)
+                .unwrap();
+            assert!(report.converged);
+            let v = end_velocities(&gs, &v_free);
+            let u_free: Vector3<f64> = (0..4).map(|k| c.weights[k] * v_free[k]).sum();
+            let u: Vector3<f64> = (0..4).map(|k| c.weights[k] * v[k]).sum();
+            assert!(u_free.dot(&c.normal) < 0.0);
+            assert!(
+                u.dot(&c.normal).abs() <= 1e-12,
+                "normal relative velocity {}",
+                u.dot(&c.normal)
+            );
+            let tangential_change = (u - u_free) - (u - u_free).dot(&c.normal) * c.normal;
+            assert!(tangential_change.norm() <= 1e-12);
+            let p0 = total_momentum(&inv_mass, &v_free);
+            assert!((total_momentum(&inv_mass, &v) - p0).norm() <= 1e-12 * (1.0 + p0.norm()));
+            assert!(gs.node_forces().iter().sum::<Vector3<f64>>().norm() <= 1e-12);
+        }
+    }
+
+    /// Ground segment (fixed, nodes 0-1) with three free segments stacked on
+    /// it, alternately along x and y, under gravity with random sliding.
+    fn stack(rng: &mut StdRng, mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
+        let r = 0.05;
+        let mut x = Vec::new();
+        for level in 0..4 {
+            let z = 2.0 * r * level as f64;
+            let (c, o) = (0.1 * level as f64, 0.2 - 0.15 * level as f64);
+            if level % 2 == 0 {
+                x.extend([Vector3::new(-1.0 + c, o, z), Vector3::new(1.0 + c, o, z)]);
+            } else {
+                x.extend([Vector3::new(o, -1.0 + c, z), Vector3::new(o, 1.0 + c, z)]);
+            }
+        }
+        let contacts = (1..4)
+            .map(|l| contact(&x, [2 * l, 2 * l + 1, 2 * l - 2, 2 * l - 1], 2.0 * r, mu))
+            .collect();
+        let mut inv_mass = vec![0.0, 0.0];
+        inv_mass.extend((2..8).map(|_| 1.0 / rng.gen_range(0.5..2.0)));
+        let dt = 1e-2;
+        let v_free = (0..8)
+            .map(|k| {
+                if k < 2 {
+                    Vector3::zeros()
+                } else {
+                    let mut v = random_vector(rng, 0.1);
+                    v.z = -9.81 * dt - rng.gen_range(0.0..0.05);
+                    v
+                }
+            })
+            .collect();
+        (contacts, inv_mass, v_free)
+    }
+
+    #[test]
+    fn stack_converges_and_satisfies_signorini_coulomb() {
+        let mut rng = StdRng::seed_from_u64(22);
+        let mut gs = GaussSeidel::new();
+        let options = GaussSeidelOptions {
+            max_sweeps: 10_000,
+            tolerance: 1e-12,
+            close_gap: true,
+        };
+        for &mu in &[0.0, 0.05, 0.3, 1.0, 5.0] {
+            for _ in 0..50 {
+                let (contacts, inv_mass, v_free) = stack(&mut rng, mu);
+                let report = gs
+                    .solve(&contacts, &inv_mass, &v_free, 1e-2, &options, None)
+                    .unwrap();
+                assert!(
+                    report.converged && report.residual <= 1e-10,
+                    "mu {mu}: {report:?}"
+                );
+                assert!(
+                    gs.local.iter().all(|r| r.x > 0.0),
+                    "every contact of the stack carries load"
+                );
+                assert_solution(&gs, &contacts, 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn result_independent_of_contact_order() {
+        let mut rng = StdRng::seed_from_u64(23);
+        let options = GaussSeidelOptions {
+            max_sweeps: 10_000,
+            tolerance: 1e-13,
+            close_gap: true,
+        };
+        let (mut gs, mut gs_shuffled) = (GaussSeidel::new(), GaussSeidel::new());
+        for &mu in &[0.0, 0.3] {
+            for _ in 0..20 {
+                let (contacts, inv_mass, v_free) = stack(&mut rng, mu);
+                let mut order: Vec<usize> = (0..contacts.len()).collect();
+                order.shuffle(&mut rng);
+                let shuffled: Vec<_> = order.iter().map(|&c| contacts[c]).collect();
+                gs.solve(&contacts, &inv_mass, &v_free, 1e-2, &options, None)
+                    .unwrap();
+                gs_shuffled
+                    .solve(&shuffled, &inv_mass, &v_free, 1e-2, &options, None)
+                    .unwrap();
+                let scale = gs.contact_forces().iter().fold(0.0f64, |m, f| m.max(f.norm()));
+                for (k, &c) in order.iter().enumerate() {
+                    let diff = (gs_shuffled.contact_forces()[k] - gs.contact_forces()[c]).norm();
+                    assert!(diff <= 1e-9 * scale, "mu {mu}: force differs by {diff}");
+                }
+            }
+        }
+        // Knot contacts, frictionless: end velocities are unique.
+        let (contacts, inv_mass, v_free) = knot_problem(0.0);
+        let mut order: Vec<usize> = (0..contacts.len()).collect();
+        order.shuffle(&mut rng);
+        let shuffled: Vec<_> = order.iter().map(|&c| contacts[c]).collect();
+        gs.solve(&contacts, &inv_mass, &v_free, 1e-3, &options, None)
+            .unwrap();
+        gs_shuffled
+            .solve(&shuffled, &inv_mass, &v_free, 1e-3, &options, None)
+            .unwrap();
+        let scale = v_free.iter().fold(0.0f64, |m, v| m.max(v.norm()));
+        let (va, vb) = (
+            end_velocities(&gs, &v_free),
+            end_velocities(&gs_shuffled, &v_free),
+        );
+        for (a, b) in va.iter().zip(&vb) {
+            assert!((a - b).norm() <= 1e-8 * scale);
+        }
+    }
+
+    /// Contacts of an open tight (2, 7) torus knot (301 nodes, unit inverse masses)
+    /// whose nodes move towards the knot's axis.
+    fn knot_problem(mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
+        let (radius, margin) = (0.25, 0.02);
+        let x = torus_knot(2.0, 7.0, 1.5, 0.5, 301, 0.9);
+        let segments = polyline_segments(&x, radius, 0);
+        let gap = neighbour_gap(2.0 * radius, (x[1] - x[0]).norm());
+        let mut bp = BroadPhase::new();
+        let contacts: Vec<_> = bp
+            .find_pairs(&segments, &[gap], margin)
+            .unwrap()
+            .iter()
+            .filter_map(|p| {
+                ContactPoint::from_pair([p.i, p.i + 1, p.j, p.j + 1], &p.closest, 2.0 * radius, mu)
+            })
+            .collect();
+        assert!(contacts.len() > 100);
+        let v_free = x
+            .iter()
+            .map(|p| Vector3::new(-p.x, -p.y, 0.5 * p.z.signum()))
+            .collect();
+        (contacts, vec![1.0; x.len()], v_free)
+    }
+
+    #[test]
+    fn knot_contacts_converge() {
+        let mut gs = GaussSeidel::new();
+        for &mu in &[0.0, 0.1, 0.5] {
+            let (contacts, inv_mass, v_free) = knot_problem(mu);
+            let options = GaussSeidelOptions {
+                max_sweeps: 20_000,
+                tolerance: 1e-10,
+                close_gap: true,
+            };
+            let report = gs
+                .solve(&contacts, &inv_mass, &v_free, 1e-3, &options, None)
+                .unwrap();
+            assert!(report.converged && report.residual <= 1e-8, "mu {mu}: {report:?}");
+            assert_solution(&gs, &contacts, 1e-7);
+        }
+    }
+
+    #[test]
+    fn warm_start_reuses_solution_without_allocating() {
+        let mut rng = StdRng::seed_from_u64(24);
+        let (contacts, inv_mass, v_free) = stack(&mut rng, 0.3);
+        let options = GaussSeidelOptions {
+            tolerance: 1e-12,
+            max_sweeps: 10_000,
+            ..Default::default()
+        };
+        let mut gs = GaussSeidel::new();
+        let cold = gs
+            .solve(&contacts, &inv_mass, &v_free, 1e-2, &options, None)
+            .unwrap();
+        let forces = gs.contact_forces().to_vec();
+        let buffers = |gs: &GaussSeidel| {
+            [
+                gs.frames.as_ptr() as usize,
+                gs.delassus.as_ptr() as usize,
+                gs.free.as_ptr() as usize,
+                gs.local.as_ptr() as usize,
+                gs.dv.as_ptr() as usize,
+                gs.forces.as_ptr() as usize,
+                gs.node_forces.as_ptr() as usize,
+            ]
+        };
+        let before = buffers(&gs);
+        let warm = gs
+            .solve(&contacts, &inv_mass, &v_free, 1e-2, &options, Some(&forces))
+            .unwrap();
+        assert_eq!(before, buffers(&gs));
+        assert!(
+            cold.sweeps > 2 && warm.sweeps == 1 && warm.converged,
+            "{cold:?} {warm:?}"
+        );
+        for (a, b) in forces.iter().zip(gs.contact_forces()) {
+            assert!((a - b).norm() <= 1e-10 * a.norm());
+        }
+    }
+
+    #[test]
+    fn separating_and_gap_handling() {
+        let x = [
+            Vector3::new(-1.0, 0.0, 0.25),
+            Vector3::new(1.0, 0.0, 0.25),
+            Vector3::new(0.0, -1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let mut gs = GaussSeidel::new();
+        let inv_mass = [1.0, 1.0, 0.0, 0.0];
+        let dt = 0.1;
+        let open = |close_gap| GaussSeidelOptions {
+            close_gap,
+            ..Default::default()
+        };
+        // Gap 0.05 closes at 0.5 m/s: approaching at 0.4 m/s needs no force.
+        let c = contact(&x, [0, 1, 2, 3], 0.2, 0.5);
+        let v_free = [
+            Vector3::new(0.0, 0.0, -0.4),
+            Vector3::new(0.0, 0.0, -0.4),
+            Vector3::zeros(),
+            Vector3::zeros(),
+        ];
+        gs.solve(&[c], &inv_mass, &v_free, dt, &open(true), None).unwrap();
+        assert_eq!(gs.contact_forces()[0], Vector3::zeros());
+        // Penetration of 0.05: pushed out at 0.5 m/s only when closing the gap.
+        let c = contact(&x, [0, 1, 2, 3], 0.3, 0.5);
+        let v_free = [Vector3::zeros(); 4];
+        gs.solve(&[c], &inv_mass, &v_free, dt, &open(true), None).unwrap();
+        let v = end_velocities(&gs, &v_free);
+        assert!((0.5 * (v[0].z + v[1].z) - 0.5).abs() < 1e-12);
+        gs.solve(&[c], &inv_mass, &v_free, dt, &open(false), None)
+            .unwrap();
+        assert_eq!(gs.contact_forces()[0], Vector3::zeros());
+        // Both bodies fixed: the contact cannot act.
+        let report = gs.solve(&[c], &[0.0; 4], &v_free, dt, &open(true), None).unwrap();
+        assert!(report.converged && report.residual == 0.0);
+        assert_eq!(gs.contact_forces()[0], Vector3::zeros());
+        // No contacts.
+        let report = gs.solve(&[], &inv_mass, &v_free, dt, &open(true), None).unwrap();
+        assert!(report.converged && gs.node_forces().iter().all(|f| *f == Vector3::zeros()));
+    }
+
+    #[test]
+    fn invalid_input() {
+        let x = [
+            Vector3::new(-1.0, 0.0, 0.25),
+            Vector3::new(1.0, 0.0, 0.25),
+            Vector3::new(0.0, -1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let c = contact(&x, [0, 1, 2, 3], 0.2, 0.5);
+        let inv_mass = [1.0; 4];
+        let v = [Vector3::zeros(); 4];
+        let o = GaussSeidelOptions::default();
+        let mut gs = GaussSeidel::new();
+        let err = |r: Result<SolveReport, ContactError>| r.unwrap_err();
+        assert_eq!(
+            err(gs.solve(&[c], &inv_mass, &v[..3], 0.1, &o, None)),
+            ContactError::LengthMismatch {
+                inv_mass: 4,
+                v_free: 3
+            }
+        );
+        assert_eq!(
+            err(gs.solve(&[c], &inv_mass, &v, 0.0, &o, None)),
+            ContactError::InvalidTimeStep(0.0)
+        );
+        assert_eq!(
+            err(gs.solve(&[c], &[1.0, -1.0, 1.0, 1.0], &v, 0.1, &o, None)),
+            ContactError::InvalidNode(1)
+        );
+        let far = ContactPoint {
+            nodes: [0, 1, 2, 9],
+            ..c
+        };
+        assert_eq!(
+            err(gs.solve(&[c, far], &inv_mass, &v, 0.1, &o, None)),
+            ContactError::NodeOutOfRange {
+                contact: 1,
+                node: 9,
+                nodes: 4
+            }
+        );
+        let skew = ContactPoint {
+            normal: 2.0 * c.normal,
+            ..c
+        };
+        assert_eq!(
+            err(gs.solve(&[skew], &inv_mass, &v, 0.1, &o, None)),
+            ContactError::InvalidContact(0)
+        );
+        let sticky = ContactPoint { mu: -0.1, ..c };
+        assert_eq!(
+            err(gs.solve(&[sticky], &inv_mass, &v, 0.1, &o, None)),
+            ContactError::InvalidContact(0)
+        );
+        assert_eq!(
+            err(gs.solve(&[c], &inv_mass, &v, 0.1, &o, Some(&[]))),
+            ContactError::WarmStartLength { expected: 1, got: 0 }
+        );
+        assert_eq!(
+            err(gs.solve(&[c], &inv_mass, &v, 0.1, &o, Some(&[Vector3::repeat(f64::NAN)]))),
+            ContactError::InvalidWarmStart(0)
+        );
+    }
+
+    #[test]
+    fn repeated_node_self_block() {
+        // Contact sharing node 1 between A and B (degenerate, but W_cc stays exact).
+        let c = ContactPoint {
+            nodes: [0, 1, 1, 2],
+            weights: [0.5, 0.5, -0.3, -0.7],
+            normal: Vector3::z(),
+            gap: 0.0,
+            mu: 0.0,
+        };
+        let inv_mass = [1.0, 2.0, 3.0];
+        let expected = 0.25 * 1.0 + 0.2f64.powi(2) * 2.0 + 0.49 * 3.0;
+        assert!((self_block(&c, &inv_mass) - expected).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,514 @@
+//! Overhand-knot builder: the initial centreline of an overhand knot with `n`
+//! passes (paper Sec. 2 and 4), resampled to `K` nodes with equal edges.
+//!
+//! The shape is that of [`super::geometry`]: braid arc with a double helix,
+//! loop closing the ring, two tails bent onto the pulling axis `x`. Given the
+//! rod length `L`, the strand length `l_b` of each braid pass and the loop
+//! length `l_l`, each tail has length `l_t = (L - 2 l_b - l_l) / 2`; the
+//! requested clamp-to-clamp distance `l_c` then fixes how much the braid arc
+//! turns (a straight braid and straight tails give the largest `l_c`), and the
+//! loop shape closes the ring. The helix radius is `a = (1 + gap) h`, with the
+//! gap raised in steps until every pair of non-neighbouring segments (index
+//! gap `> ceil(2h / edge) + 1`) is at least `2h` apart.
+use super::geometry::{Braid, Plan, loop_drift, sinc};
+use super::topology::{TopologyError, expected_determinant, knot_determinant};
+use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::ops::Range;
+use thiserror::Error;
+
+/// Largest number of passes.
+pub const MAX_PASSES: u32 = 8;
+/// The radius must satisfy `h < L * MAX_RADIUS_RATIO`.
+pub const MAX_RADIUS_RATIO: f64 = 1.0 / 50.0;
+/// Edges may be at most this many radii long.
+pub const MAX_EDGE_RADII: f64 = 4.0;
+/// Each braid pass (half twist) needs at least this many edges.
+pub const MIN_EDGES_PER_PASS: f64 = 4.0;
+/// The helix pitch per radian is at least this many helix radii.
+pub const MIN_PITCH: f64 = 1.0;
+/// Bend radii of loop and tails are at least this many helix radii.
+pub const MIN_BEND: f64 = 3.0;
+/// The default braid is at least this factor above the shortest one.
+pub const BRAID_MARGIN: f64 = 1.1;
+/// Gaps `(a - h) / h` tried in turn.
+const GAPS: [f64; 4] = [0.1, 0.2, 0.35, 0.5];
+/// Largest half turning angle of the braid arc.
+const MAX_THETA: f64 = 0.75 * PI;
+/// Largest `|alpha|` of the loop profile.
+const MAX_ALPHA: f64 = 0.8;
+/// Samples of the braid angle when bracketing the feasible end-to-end range.
+const SCAN: usize = 96;
+
+/// Default strand length per braid pass, loop remainder and end-to-end
+/// distance, as fractions of `L`, for `n = 1..=8` (`n <= 4`: the relaxed
+/// knots of the paper at `h = 1.6 mm`; beyond, extrapolated with the braid
+/// growing and the loop shrinking).
+const DEFAULT_BRAID: [f64; 8] = [0.12, 0.19, 0.24, 0.28, 0.30, 0.315, 0.33, 0.345];
+const DEFAULT_TAIL: [f64; 8] = [0.08, 0.075, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035];
+const DEFAULT_END_TO_END: [f64; 8] = [0.28, 0.30, 0.31, 0.32, 0.31, 0.30, 0.29, 0.28];
+
+/// What to build. Lengths in metres.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KnotSpec {
+    /// Number of passes (unknotting number) `n`, `1..=8`.
+    pub n: u32,
+    /// Rod length `L` (rest length of the resampled polyline).
+    pub length: f64,
+    /// Node count `K`.
+    pub nodes: usize,
+    /// Cross-section radius `h`, below `L / 50`.
+    pub radius: f64,
+    /// Clamp-to-clamp distance `l_c`. Default: `[0.28, 0.30, 0.31, 0.32, 0.31,
+    /// 0.30, 0.29, 0.28][n-1] L`, moved into the feasible range if needed.
+    #[serde(default)]
+    pub end_to_end: Option<f64>,
+    /// Strand length of each braid pass `l_b`. Default: `[0.12, 0.19, 0.24,
+    /// 0.28, 0.30, 0.315, 0.33, 0.345][n-1] L`, but at least
+    /// [`BRAID_MARGIN`] times the shortest braid for radius `h`.
+    #[serde(default)]
+    pub braid_length: Option<f64>,
+    /// Loop length `l_l`. Default: `L - 2 l_b - 2 t L` with the tail fraction
+    /// `t = [0.08, 0.075, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035][n-1]`.
+    #[serde(default)]
+    pub loop_length: Option<f64>,
+}
+
+impl KnotSpec {
+    /// The paper's setting: `L = 1 m`, `K = 301`, `h = 1.6 mm`, default shape.
+    pub fn paper(n: u32) -> Self {
+        Self {
+            n,
+            length: 1.0,
+            nodes: 301,
+            radius: 1.6e-3,
+            end_to_end: None,
+            braid_length: None,
+            loop_length: None,
+        }
+    }
+}
+
+/// Node index ranges of the parts of the knot, in rod order; they partition
+/// `0..K`. A node belongs to the part containing its arc-length position on
+/// the designed curve.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Regions {
+    /// From clamp A to the braid.
+    pub tail_a: Range<usize>,
+    /// First pass through the braid (strand A).
+    pub braid_a: Range<usize>,
+    /// The loop.
+    pub loop_arc: Range<usize>,
+    /// Second pass through the braid (strand B).
+    pub braid_b: Range<usize>,
+    /// From the braid to clamp B.
+    pub tail_b: Range<usize>,
+}
+
+/// A built knot. Nodes 0, 1 and K-2, K-1 lie on the x axis (the pulling axis)
+/// with `x_0 < x_1` and `x_{K-2} < x_{K-1}`; all `K - 1` edges have length
+/// `L / (K - 1)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KnotShape {
+    /// Node positions.
+    pub points: Vec<Vector3<f64>>,
+    /// Parts of the knot.
+    pub regions: Regions,
+    /// Edge length `L / (K - 1)`.
+    pub edge_length: f64,
+    /// Clamp-to-clamp distance `x_{K-1} - x_0`.
+    pub end_to_end: f64,
+    /// Mean strand length of one braid pass (designed curve).
+    pub braid_length: f64,
+    /// Loop length (designed curve).
+    pub loop_length: f64,
+    /// Length of each tail (designed curve).
+    pub tail_length: f64,
+    /// Helix radius `a` of the braid strands about the braid centreline.
+    pub helix_radius: f64,
+}
+
+/// Why a knot could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum KnotError {
+    #[error("number of passes n = {0} must be in 1..=8")]
+    Passes(u32),
+    #[error("{name} = {value} must be finite and positive")]
+    InvalidParameter { name: &'static str, value: f64 },
+    #[error("radius h = {radius} m is too large: the rod length requires h < L/50 = {max} m")]
+    RadiusTooLarge { radius: f64, max: f64 },
+    #[error("{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}")]
+    TooFewNodes { nodes: usize, min: usize },
+    #[error("braid strand length {braid_length} m is too short for 2n+1 half twists of radius h: need {min} m")]
+    BraidTooShort { braid_length: f64, min: f64 },
+    #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
+    TailsTooShort { tail_length: f64, min: f64 },
+    #[error("no valid shape: the loop of {loop_length} m cannot close around the braid with these lengths")]
+    Infeasible { loop_length: f64 },
+    #[error("end-to-end distance {end_to_end} m is outside the feasible range [{min}, {max}] m")]
+    EndToEndOutOfRange { end_to_end: f64, min: f64, max: f64 },
+    #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
+    Clearance { distance: f64, required: f64 },
+    #[error("topology check failed: {0}")]
+    Topology(#[from] TopologyError),
+    #[error("built curve has knot determinant {got}, expected {expected}")]
+    WrongKnot { got: u64, expected: u64 },
+}
+
+/// Builds the knot described by `spec`.
+pub fn build(spec: &KnotSpec) -> Result<KnotShape, KnotError> {
+    validate(spec)?;
+    let mut clearance = None;
+    for gap in GAPS {
+        match attempt(spec, gap) {
+            Err(e @ KnotError::Clearance { .. }) => clearance = Some(e),
+            // A larger gap may make the braid infeasible; report the clearance.
+            Err(e) => return Err(clearance.unwrap_or(e)),
+            Ok(shape) => return Ok(shape),
+        }
+    }
+    Err(clearance.expect("every gap failed the clearance"))
+}
+
+fn validate(spec: &KnotSpec) -> Result<(), KnotError> {
+    if !(1..=MAX_PASSES).contains(&spec.n) {
+        return Err(KnotError::Passes(spec.n));
+    }
+    let optional = [
+        ("end_to_end", spec.end_to_end),
+        ("braid_length", spec.braid_length),
+        ("loop_length", spec.loop_length),
+    ];
+    let given = optional.into_iter().filter_map(|(name, v)| v.map(|v| (name, v)));
+    for (name, value) in [("length", spec.length), ("radius", spec.radius)].into_iter().chain(given) {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(KnotError::InvalidParameter { name, value });
+        }
+    }
+    let max = spec.length * MAX_RADIUS_RATIO;
+    if spec.radius >= max {
+        return Err(KnotError::RadiusTooLarge {
+            radius: spec.radius,
+            max,
+        });
+    }
+    Ok(())
+}
+
+/// Lengths and constraints of one attempt (fixed helix radius).
+struct Design {
+    braid: Braid,
+    strands: StrandTable,
+    strand_length: f64,
+    loop_length: f64,
+    loop_steps: usize,
+    edge: f64,
+    spacing: f64,
+}
+
+/// Precomputed Simpson samples of `cos psi` and `(a dpsi/du)^2` for strand lengths.
+struct StrandTable {
+    weights: Vec<f64>,
+    cos_psi: Vec<f64>,
+    twist: Vec<f64>,
+}
+
+impl StrandTable {
+    fn new(braid: &Braid) -> Self {
+        let m = 1024;
+        let (mut weights, mut cos_psi, mut twist) = (vec![], vec![], vec![]);
+        for i in 0..=m {
+            let w = if i == 0 || i == m { 1.0 } else { [2.0, 4.0][i % 2] };
+            let (psi, dpsi) = braid.phase(i as f64 / m as f64);
+            weights.push(w / (3.0 * m as f64));
+            cos_psi.push(psi.cos());
+            twist.push((braid.radius * dpsi).powi(2));
+        }
+        Self { weights, cos_psi, twist }
+    }
+}
+
+impl Design {
+    /// Mean strand length over a braid of centreline `b` and half angle
+    /// `theta`, with its derivative in `b`.
+    fn strand(&self, b: f64, theta: f64) -> (f64, f64) {
+        let side = 2.0 * self.braid.radius * theta;
+        let t = &self.strands;
+        let mut acc = (0.0, 0.0);
+        for ((w, c), tw) in t.weights.iter().zip(&t.cos_psi).zip(&t.twist) {
+            for along in [b + side * c, b - side * c] {
+                let speed = (along * along + tw).sqrt();
+                acc.0 += 0.5 * w * speed;
+                acc.1 += 0.5 * w * along / speed;
+            }
+        }
+        acc
+    }
+
+    /// Braid centreline giving the strand length (Newton from the strand length).
+    fn centreline(&self, theta: f64) -> f64 {
+        let mut b = self.strand_length;
+        for _ in 0..30 {
+            let (len, dlen) = self.strand(b, theta);
+            let step = (len - self.strand_length) / dlen;
+            b -= step;
+            if step.abs() <= 1e-15 * b {
+                break;
+            }
+        }
+        b
+    }
+
+    fn clamp_section(&self, tail: f64) -> f64 {
+        (2.5 * self.edge).max(0.25 * tail)
+    }
+
+    /// Half clamp-to-clamp distance at braid half angle `theta`.
+    fn half_span(&self, tail: f64, theta: f64) -> f64 {
+        let clamp = self.clamp_section(tail);
+        0.5 * self.centreline(theta) * sinc(theta) + (tail - clamp) * sinc(theta) + clamp
+    }
+
+    /// The largest `|alpha|` keeping the loop's bend radius at `MIN_BEND a`.
+    fn alpha_bound(&self, theta: f64) -> f64 {
+        let mean_radius = self.loop_length / (2.0 * PI - 2.0 * theta);
+        (mean_radius / (MIN_BEND * self.braid.radius) - 1.0).min(MAX_ALPHA)
+    }
+
+    /// The loop-shape bound and closure target at `theta`, if the loop can close.
+    fn loop_closure(&self, theta: f64, b: f64) -> Option<(f64, f64)> {
+        let bound = self.alpha_bound(theta);
+        let target = -b * sinc(theta) / self.loop_length;
+        let drift = |alpha| loop_drift(theta, alpha, self.loop_steps);
+        (bound >= 0.0 && drift(-bound) <= target && drift(bound) >= target).then_some((bound, target))
+    }
+
+    /// The plan at `theta` with the loop still unsolved (`alpha = 0`), if
+    /// all constraints can hold.
+    fn candidate(&self, tail: f64, theta: f64) -> Option<(Plan, f64, f64)> {
+        let b = self.centreline(theta);
+        let (bound, target) = self.loop_closure(theta, b)?;
+        let plan = Plan {
+            braid: self.braid,
+            theta,
+            centreline: b,
+            loop_length: self.loop_length,
+            alpha: 0.0,
+            loop_steps: self.loop_steps,
+            tail_length: tail,
+            clamp_section: self.clamp_section(tail),
+        };
+        let a = self.braid.radius;
+        let tails_ok = theta == 0.0 || plan.tail_radius() >= MIN_BEND * a;
+        (tails_ok && plan.tail_min_x() >= 2.0 * a).then_some((plan, bound, target))
+    }
+
+    /// The plan at `theta`, its loop closed (bisection on the increasing
+    /// drift), if all constraints hold.
+    fn plan(&self, tail: f64, theta: f64) -> Option<Plan> {
+        let (mut plan, bound, target) = self.candidate(tail, theta)?;
+        let (mut lo, mut hi) = (-bound, bound);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if loop_drift(theta, mid, self.loop_steps) < target { lo = mid } else { hi = mid }
+        }
+        plan.alpha = 0.5 * (lo + hi);
+        Some(plan)
+    }
+
+    /// Range of feasible braid half angles `[lo, hi]`.
+    fn feasible_angles(&self, tail: f64) -> Option<(f64, f64)> {
+        let ok = |theta| self.candidate(tail, theta).is_some();
+        let grid: Vec<f64> = (0..=SCAN).map(|k| MAX_THETA * k as f64 / SCAN as f64).collect();
+        let first = grid.iter().position(|&t| ok(t))?;
+        let last = grid.iter().rposition(|&t| ok(t))?;
+        // Refine each end between its feasible sample and the infeasible neighbour.
+        let refine = |mut good: f64, mut bad: f64| {
+            for _ in 0..40 {
+                let mid = 0.5 * (good + bad);
+                if ok(mid) { good = mid } else { bad = mid }
+            }
+            good
+        };
+        let lo = if first == 0 { 0.0 } else { refine(grid[first], grid[first - 1]) };
+        let hi = if last == SCAN { MAX_THETA } else { refine(grid[last], grid[last + 1]) };
+        Some((lo, hi))
+    }
+
+    /// Braid half angle giving the half span (decreasing in `theta`), by bisection.
+    fn angle_for(&self, tail: f64, half_span: f64, (lo, hi): (f64, f64)) -> f64 {
+        let (mut lo, mut hi) = (lo, hi);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if self.half_span(tail, mid) > half_span { lo = mid } else { hi = mid }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
+    let (n, length, h) = (spec.n, spec.length, spec.radius);
+    let index = n as usize - 1;
+    let braid = Braid {
+        passes: n,
+        radius: (1.0 + gap) * h,
+    };
+    let edge = length / (spec.nodes.max(2) - 1) as f64;
+    let mut design = Design {
+        braid,
+        strands: StrandTable::new(&braid),
+        strand_length: 0.0,
+        loop_length: 0.0,
+        loop_steps: 0,
+        edge,
+        spacing: edge.min(braid.radius) / 8.0,
+    };
+    let shortest = design.strand(braid.min_centreline(MIN_PITCH), 0.0).0;
+    let strand = spec
+        .braid_length
+        .unwrap_or((DEFAULT_BRAID[index] * length).max(BRAID_MARGIN * shortest));
+    if strand < shortest {
+        return Err(KnotError::BraidTooShort {
+            braid_length: strand,
+            min: shortest,
+        });
+    }
+    let max_edge = (MAX_EDGE_RADII * h).min(strand / (MIN_EDGES_PER_PASS * braid.half_twists()));
+    if edge > max_edge {
+        return Err(KnotError::TooFewNodes {
+            nodes: spec.nodes,
+            min: (length / max_edge).ceil() as usize + 1,
+        });
+    }
+    let loop_length = spec
+        .loop_length
+        .unwrap_or(length - 2.0 * strand - 2.0 * DEFAULT_TAIL[index] * length);
+    let tail = 0.5 * (length - 2.0 * strand - loop_length);
+    let min_tail = 3.0 * edge;
+    if tail < min_tail {
+        return Err(KnotError::TailsTooShort {
+            tail_length: tail,
+            min: min_tail,
+        });
+    }
+    design.strand_length = strand;
+    design.loop_length = loop_length;
+    design.loop_steps = (loop_length / design.spacing).ceil() as usize;
+
+    let angles = design.feasible_angles(tail).ok_or(KnotError::Infeasible { loop_length })?;
+    let (min, max) = (2.0 * design.half_span(tail, angles.1), 2.0 * design.half_span(tail, angles.0));
+    let end_to_end = match spec.end_to_end {
+        Some(l) if l < min || l > max => {
+            return Err(KnotError::EndToEndOutOfRange { end_to_end: l, min, max });
+        }
+        Some(l) => l,
+        None => {
+            let margin = 0.05 * (max - min);
+            (DEFAULT_END_TO_END[index] * length).clamp(min + margin, max - margin)
+        }
+    };
+
+    // Resampling with equal chords consumes slightly more than L of curve:
+    // lengthen the tails by that excess until the last node lands on clamp B.
+    let extension = 4.0 * edge + 1e-3 * length;
+    let mut curve = length;
+    let mut result = None;
+    for _ in 0..8 {
+        let tail = 0.5 * (curve - 2.0 * strand - loop_length);
+        let theta = design.angle_for(tail, 0.5 * end_to_end, angles);
+        let plan = design.plan(tail, theta).ok_or(KnotError::Infeasible { loop_length })?;
+        let dense = plan.dense(design.spacing, extension);
+        let (points, positions) = resample(&dense.points, &dense.arc, edge, spec.nodes);
+        let excess = positions[positions.len() - 1] - dense.arc[dense.marks[4]];
+        curve += excess;
+        let done = excess.abs() <= 1e-13 * length;
+        result = Some((plan, dense, points, positions));
+        if done {
+            break;
+        }
+    }
+    let (plan, dense, points, positions) = result.expect("at least one iteration");
+    let cut = |mark: usize| positions.partition_point(|&s| s < dense.arc[dense.marks[mark]]);
+    let [a, b, c, d] = [0, 1, 2, 3].map(cut);
+    let regions = Regions {
+        tail_a: 0..a,
+        braid_a: a..b,
+        loop_arc: b..c,
+        braid_b: c..d,
+        tail_b: d..points.len(),
+    };
+    check_clearance(&points, h, edge)?;
+    let expected = expected_determinant(n);
+    let got = knot_determinant(&points)?;
+    if got != expected {
+        return Err(KnotError::WrongKnot { got, expected });
+    }
+    Ok(KnotShape {
+        end_to_end: points[points.len() - 1].x - points[0].x,
+        points,
+        regions,
+        edge_length: edge,
+        braid_length: strand,
+        loop_length,
+        tail_length: plan.tail_length,
+        helix_radius: braid.radius,
+    })
+}
+
+/// `count` nodes along the dense polyline from its start, consecutive nodes
+/// exactly `edge` apart (each next node is the first point of the polyline,
+/// past the current one, at distance `edge`); returns the nodes and their arc
+/// positions on the polyline.
+fn resample(dense: &[Vector3<f64>], arc: &[f64], edge: f64, count: usize) -> (Vec<Vector3<f64>>, Vec<f64>) {
+    let mut nodes = vec![dense[0]];
+    let mut positions = vec![0.0];
+    let mut next = 1;
+    while nodes.len() < count {
+        let p = nodes[nodes.len() - 1];
+        while (dense[next] - p).norm() < edge {
+            next += 1;
+        }
+        // The node lies on dense segment (next - 1, next), whose start is
+        // closer than `edge` to p: take the root of |q + t d| = edge in [0, 1].
+        let (q, d) = (dense[next - 1] - p, dense[next] - dense[next - 1]);
+        let (dd, qd) = (d.norm_squared(), q.dot(&d));
+        let t = (-qd + (qd * qd - dd * (q.norm_squared() - edge * edge)).sqrt()) / dd;
+        nodes.push(dense[next - 1] + t * d);
+        positions.push(arc[next - 1] + t * (arc[next] - arc[next - 1]));
+    }
+    (nodes, positions)
+}
+
+/// Fails if two non-neighbouring segments are closer than `2h`.
+fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), KnotError> {
+    let segments: Vec<Segment> = points
+        .windows(2)
+        .enumerate()
+        .map(|(index, w)| Segment {
+            a: w[0],
+            b: w[1],
+            radius: h,
+            body: 0,
+            index,
+        })
+        .collect();
+    let mut broad = BroadPhase::new();
+    let gap = neighbour_gap(2.0 * h, edge);
+    let pairs = broad.find_pairs(&segments, &[gap], 0.0).expect("valid segments");
+    match pairs.iter().map(|p| p.closest.distance).min_by(f64::total_cmp) {
+        Some(distance) => Err(KnotError::Clearance {
+            distance,
+            required: 2.0 * h,
+        }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,358 @@
+//! Topology check: the knot determinant `|Delta(-1)|` of a polygonal curve.
+//!
+//! The closed polygon is projected along a generic direction; the crossings of
+//! the diagram (found by a sweep over the projected segments, `O(N log N + k)`
+//! for `N` segments and `k` overlapping pairs) cut it into `c` arcs, one per
+//! crossing. Each crossing gives the row `2 x_over - x_in - x_out` of the Fox
+//! colouring matrix, which is the Alexander matrix at `t = -1`; the knot
+//! determinant is `|det|` of any `(c-1) x (c-1)` minor (1 for `c <= 1`). The
+//! minor is evaluated exactly modulo two 62-bit primes and recombined (exact
+//! for `|det| < 2^121`). A projection is rejected as degenerate when a crossing
+//! lies on a vertex, two crossings or two segments coincide in the diagram, or
+//! the two strands of a crossing touch in space; the direction is then tilted
+//! deterministically and the diagram rebuilt.
+//!
+//! Open curves (the clamped rod) are closed first, see [`close_open_curve`].
+//! The overhand knot with `n` passes closes to the `(2, 2n+1)` torus knot, whose
+//! determinant is [`expected_determinant`]`(n) = 2n + 1`.
+use nalgebra::{Matrix3, SymmetricEigen, Vector2, Vector3};
+use thiserror::Error;
+
+/// Projection directions tried before giving up.
+pub const MAX_ATTEMPTS: usize = 16;
+
+/// Relative tolerance of the diagram: segment parameters within it of a vertex,
+/// and depths within it (times the curve's size) of each other, are degenerate.
+const TOLERANCE: f64 = 1e-9;
+
+/// Two primes below `2^62`; the determinant is computed modulo each.
+const PRIMES: [u64; 2] = [(1 << 61) - 1, (1 << 62) - 57];
+
+/// Why the determinant could not be computed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum TopologyError {
+    #[error("a curve needs at least {min} points, got {got}")]
+    TooFewPoints { got: usize, min: usize },
+    #[error("point {0} is not finite")]
+    NonFinite(usize),
+    #[error("the end points of the open curve coincide: no pulling axis")]
+    DegenerateAxis,
+    #[error("projection direction must be finite and non-zero")]
+    InvalidDirection,
+    #[error("the projection is degenerate (crossing at a vertex, overlapping segments, or touching strands)")]
+    DegenerateProjection,
+    #[error("no generic projection in {0} directions: the curve probably touches itself")]
+    NoGenericProjection(usize),
+    #[error("the knot determinant does not fit in 64 bits")]
+    Overflow,
+}
+
+/// Determinant of the `(2, 2n+1)` torus knot, the closure of the overhand knot
+/// with `n` passes: `2n + 1`.
+pub fn expected_determinant(n: u32) -> u64 {
+    2 * u64::from(n) + 1
+}
+
+/// Knot determinant of an open polyline whose end nodes lie on the pulling
+/// axis, closed as in [`close_open_curve`]; the projection starts from the
+/// normal of the best-fit plane of `points` (made perpendicular to the axis).
+pub fn knot_determinant(points: &[Vector3<f64>]) -> Result<u64, TopologyError> {
+    let (closed, direction) = closure(points)?;
+    search(&closed, &direction)
+}
+
+/// Knot determinant of a closed polygon (the last point joins the first); the
+/// projection starts from the normal of the best-fit plane of `points`.
+pub fn closed_knot_determinant(points: &[Vector3<f64>]) -> Result<u64, TopologyError> {
+    validate(points, 3)?;
+    search(points, &best_fit_normal(points))
+}
+
+/// Knot determinant of a closed polygon from its projection along `direction`
+/// only; [`TopologyError::DegenerateProjection`] if that diagram is not generic.
+pub fn determinant_along(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Result<u64, TopologyError> {
+    validate(points, 3)?;
+    let norm = direction.norm();
+    if !(norm.is_finite() && norm > 0.0) {
+        return Err(TopologyError::InvalidDirection);
+    }
+    diagram_determinant(points, &(direction / norm))?.ok_or(TopologyError::DegenerateProjection)
+}
+
+/// Closes an open polyline: with `m` the midpoint of the end nodes, `u` the unit
+/// pulling axis from the first to the last node and `R` the largest distance of
+/// a node from `m`, appends `m + D u`, `m + D u + D w`, `m - D u + D w`,
+/// `m - D u` (`D = 2R`, `w` a unit vector perpendicular to `u`, in the best-fit
+/// plane of the curve when it is not perpendicular to `u`). The ends are thus
+/// extended along the axis beyond the curve's bounding sphere and joined by a
+/// path outside it, which crosses nothing; the knot type does not depend on
+/// `w` as long as the two extensions miss the curve.
+pub fn close_open_curve(points: &[Vector3<f64>]) -> Result<Vec<Vector3<f64>>, TopologyError> {
+    closure(points).map(|(closed, _)| closed)
+}
+
+fn validate(points: &[Vector3<f64>], min: usize) -> Result<(), TopologyError> {
+    if points.len() < min {
+        return Err(TopologyError::TooFewPoints {
+            got: points.len(),
+            min,
+        });
+    }
+    match points.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        Some(i) => Err(TopologyError::NonFinite(i)),
+        None => Ok(()),
+    }
+}
+
+/// The closed polygon of [`close_open_curve`] and the preferred projection
+/// direction (perpendicular to the axis and to the closing rectangle).
+fn closure(points: &[Vector3<f64>]) -> Result<(Vec<Vector3<f64>>, Vector3<f64>), TopologyError> {
+    validate(points, 2)?;
+    let (first, last) = (points[0], points[points.len() - 1]);
+    let mid = 0.5 * (first + last);
+    let radius = points.iter().map(|p| (p - mid).norm()).fold(0.0, f64::max);
+    let axis = last - first;
+    if axis.norm() <= TOLERANCE * radius {
+        return Err(TopologyError::DegenerateAxis);
+    }
+    let u = axis.normalize();
+    let normal = best_fit_normal(points);
+    let d = normal - normal.dot(&u) * u;
+    let direction = if d.norm() > 1e-6 { d.normalize() } else { perpendicular(&u) };
+    let w = direction.cross(&u);
+    let far = 2.0 * radius;
+    let mut closed = points.to_vec();
+    closed.extend([
+        mid + far * u,
+        mid + far * (u + w),
+        mid + far * (w - u),
+        mid - far * u,
+    ]);
+    Ok((closed, direction))
+}
+
+/// Unit normal of the least-squares plane through `points` (eigenvector of the
+/// smallest eigenvalue of their covariance).
+fn best_fit_normal(points: &[Vector3<f64>]) -> Vector3<f64> {
+    let centroid = points.iter().sum::<Vector3<f64>>() / points.len() as f64;
+    let covariance = points.iter().fold(Matrix3::zeros(), |acc, p| {
+        let d = p - centroid;
+        acc + d * d.transpose()
+    });
+    let eigen = SymmetricEigen::new(covariance);
+    eigen.eigenvectors.column(eigen.eigenvalues.imin()).into_owned()
+}
+
+/// A unit vector perpendicular to the unit vector `v`.
+fn perpendicular(v: &Vector3<f64>) -> Vector3<f64> {
+    let axis = Vector3::ith(v.iamin(), 1.0);
+    v.cross(&axis).normalize()
+}
+
+/// Tries `start` tilted by a fixed sequence of small angles until a diagram is
+/// generic.
+fn search(points: &[Vector3<f64>], start: &Vector3<f64>) -> Result<u64, TopologyError> {
+    let e1 = perpendicular(start);
+    let e2 = start.cross(&e1);
+    for k in 0..MAX_ATTEMPTS {
+        let tilt = 0.0137 + 0.05 * k as f64;
+        let azimuth = 0.5 + 2.399_963 * k as f64;
+        let side = azimuth.cos() * e1 + azimuth.sin() * e2;
+        let direction = tilt.cos() * start + tilt.sin() * side;
+        if let Some(det) = diagram_determinant(points, &direction)? {
+            return Ok(det);
+        }
+    }
+    Err(TopologyError::NoGenericProjection(MAX_ATTEMPTS))
+}
+
+/// One crossing: curve positions (segment index + parameter) of the over and
+/// under strands.
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    over: f64,
+    under: f64,
+}
+
+/// Determinant from the projection along the unit `direction`; `None` if the
+/// diagram is degenerate.
+fn diagram_determinant(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Result<Option<u64>, TopologyError> {
+    match crossings(points, direction) {
+        Some(crossings) => colouring_determinant(&crossings).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The crossings of the closed polygon projected along `direction`, or `None`
+/// if the diagram is not generic.
+fn crossings(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Option<Vec<Crossing>> {
+    let n = points.len();
+    let e1 = perpendicular(direction);
+    let e2 = direction.cross(&e1);
+    let plane: Vec<Vector2<f64>> = points.iter().map(|p| Vector2::new(p.dot(&e1), p.dot(&e2))).collect();
+    let depth: Vec<f64> = points.iter().map(|p| p.dot(direction)).collect();
+    let centroid = points.iter().sum::<Vector3<f64>>() / n as f64;
+    let size = points.iter().map(|p| (p - centroid).norm()).fold(0.0, f64::max);
+    let depth_tol = TOLERANCE * size;
+    // Sweep: segments sorted by their lowest projected x, each compared with
+    // the following ones whose x-interval starts before its own ends.
+    let lo_x = |i: usize| plane[i].x.min(plane[(i + 1) % n].x);
+    let hi_x = |i: usize| plane[i].x.max(plane[(i + 1) % n].x);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| lo_x(a).total_cmp(&lo_x(b)));
+    let mut found = Vec::new();
+    for (k, &i) in order.iter().enumerate() {
+        let end = hi_x(i);
+        for &j in order[k + 1..].iter().take_while(|&&j| lo_x(j) <= end) {
+            let adjacent = j == (i + 1) % n || i == (j + 1) % n;
+            if adjacent {
+                continue;
+            }
+            match segment_crossing(&plane, i, j) {
+                Intersection::None => {}
+                Intersection::Degenerate => return None,
+                Intersection::At(t, s) => {
+                    let di = depth[i] + t * (depth[(i + 1) % n] - depth[i]);
+                    let dj = depth[j] + s * (depth[(j + 1) % n] - depth[j]);
+                    if (di - dj).abs() <= depth_tol {
+                        return None;
+                    }
+                    let (pi, pj) = (i as f64 + t, j as f64 + s);
+                    found.push(if di > dj {
+                        Crossing { over: pi, under: pj }
+                    } else {
+                        Crossing { over: pj, under: pi }
+                    });
+                }
+            }
+        }
+    }
+    // Two crossings at one point of the curve (a triple point) are degenerate.
+    let mut positions: Vec<f64> = found.iter().flat_map(|c| [c.over, c.under]).collect();
+    positions.sort_by(f64::total_cmp);
+    let distinct = positions.windows(2).all(|w| w[1] - w[0] > TOLERANCE);
+    distinct.then_some(found)
+}
+
+enum Intersection {
+    None,
+    /// Parameters along segments `i` and `j`, strictly inside both.
+    At(f64, f64),
+    Degenerate,
+}
+
+/// Intersection of projected segments `i` and `j` (closed polygon).
+fn segment_crossing(plane: &[Vector2<f64>], i: usize, j: usize) -> Intersection {
+    let n = plane.len();
+    let (p, q) = (plane[i], plane[j]);
+    let r = plane[(i + 1) % n] - p;
+    let v = plane[(j + 1) % n] - q;
+    let w = q - p;
+    let denom = r.perp(&v);
+    let scale = r.norm() * v.norm();
+    if denom.abs() <= TOLERANCE * scale {
+        // Parallel: degenerate only if collinear and overlapping.
+        let collinear = w.perp(&r).abs() <= TOLERANCE * r.norm() * (w.norm() + r.norm());
+        let rr = r.norm_squared();
+        let (a, b) = (w.dot(&r) / rr, (w + v).dot(&r) / rr);
+        let overlap = a.min(b) <= 1.0 + TOLERANCE && a.max(b) >= -TOLERANCE;
+        return if collinear && overlap {
+            Intersection::Degenerate
+        } else {
+            Intersection::None
+        };
+    }
+    let t = w.perp(&v) / denom;
+    let s = w.perp(&r) / denom;
+    let outside = |x: f64| !(-TOLERANCE..=1.0 + TOLERANCE).contains(&x);
+    let near_vertex = |x: f64| x < TOLERANCE || x > 1.0 - TOLERANCE;
+    if outside(t) || outside(s) {
+        Intersection::None
+    } else if near_vertex(t) || near_vertex(s) {
+        Intersection::Degenerate
+    } else {
+        Intersection::At(t, s)
+    }
+}
+
+/// `|det|` of the colouring matrix with its last row and column removed.
+fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
+    let c = crossings.len();
+    if c <= 1 {
+        return Ok(1);
+    }
+    // Arc k runs from the (k-1)-th to the k-th under-pass in curve order, so
+    // the arc through position x is the number of under-passes before x, mod c.
+    let mut unders: Vec<f64> = crossings.iter().map(|x| x.under).collect();
+    unders.sort_by(f64::total_cmp);
+    let arc = |x: f64| unders.partition_point(|&u| u < x) % c;
+    let m = c - 1;
+    let mut matrix = vec![0i64; m * m];
+    for (row, crossing) in crossings.iter().take(m).enumerate() {
+        let incoming = arc(crossing.under);
+        let entries = [(arc(crossing.over), 2), (incoming, -1), ((incoming + 1) % c, -1)];
+        for (col, value) in entries {
+            if col < m {
+                matrix[row * m + col] += value;
+            }
+        }
+    }
+    let residues = PRIMES.map(|p| det_mod(&matrix, m, p));
+    let (p0, p1) = (u128::from(PRIMES[0]), u128::from(PRIMES[1]));
+    // Chinese remainder: x = r0 + p0 * ((r1 - r0) / p0 mod p1), 0 <= x < p0 p1.
+    let r0 = u128::from(residues[0]);
+    let diff = (u128::from(residues[1]) + p1 - r0 % p1) % p1;
+    let k = mul_mod(diff as u64, pow_mod((p0 % p1) as u64, PRIMES[1] - 2, PRIMES[1]), PRIMES[1]);
+    let x = r0 + p0 * u128::from(k);
+    let modulus = p0 * p1;
+    let magnitude = x.min(modulus - x);
+    u64::try_from(magnitude).map_err(|_| TopologyError::Overflow)
+}
+
+fn mul_mod(a: u64, b: u64, p: u64) -> u64 {
+    (u128::from(a) * u128::from(b) % u128::from(p)) as u64
+}
+
+fn pow_mod(mut base: u64, mut exp: u64, p: u64) -> u64 {
+    let mut acc = 1;
+    while exp > 0 {
+        if exp & 1 == 1 {
+            acc = mul_mod(acc, base, p);
+        }
+        base = mul_mod(base, base, p);
+        exp >>= 1;
+    }
+    acc
+}
+
+/// Determinant of the `m x m` row-major integer matrix modulo the prime `p`
+/// (Gaussian elimination).
+fn det_mod(matrix: &[i64], m: usize, p: u64) -> u64 {
+    let mut a: Vec<u64> = matrix.iter().map(|&x| x.rem_euclid(p as i64) as u64).collect();
+    let mut det = 1;
+    for col in 0..m {
+        let Some(pivot) = (col..m).find(|&r| a[r * m + col] != 0) else {
+            return 0;
+        };
+        if pivot != col {
+            for k in col..m {
+                a.swap(pivot * m + k, col * m + k);
+            }
+            det = p - det;
+        }
+        let lead = a[col * m + col];
+        det = mul_mod(det, lead, p);
+        let inv = pow_mod(lead, p - 2, p);
+        for r in col + 1..m {
+            let factor = mul_mod(a[r * m + col], inv, p);
+            if factor == 0 {
+                continue;
+            }
+            for k in col..m {
+                let sub = mul_mod(factor, a[col * m + k], p);
+                a[r * m + k] = (a[r * m + k] + p - sub) % p;
+            }
+        }
+    }
+    det % p
+}

@@ -1,0 +1,18 @@
+//! knotsweep solver: discrete elastic rods (DER) with frictional self-contact,
+//! following Sec. 3 of "Snap buckling of overhand knots" (the paper).
+//!
+//! Layout follows the paper: `rod` (DOFs and frames, Sec. 3.1), `energies`
+//! (eq. 6), `external` (eq. 7c), `stepper` (eq. 7), `contact` (Sec. 3.2).
+//! Pure computation: no I/O, deterministic for given inputs.
+pub mod contact;
+pub mod counters;
+pub mod energies;
+pub mod external;
+pub mod knot;
+pub mod linalg;
+pub mod material;
+pub mod pipeline;
+pub mod rod;
+pub mod simplified;
+pub mod stepper;
+pub mod validation;

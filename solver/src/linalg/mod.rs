@@ -1,0 +1,4 @@
+//! Linear algebra for the Newton systems: a banded LDL^T (the DER Hessian is
+//! banded in the DOF order of eq. 1) and a general sparse path.
+pub mod banded;
+pub mod sparse;

@@ -1,0 +1,396 @@
+//! One time step of several rods with frictional contact (paper Sec. 3.2):
+//!
+//! 1. detection on the start-of-step state: broad phase, then segment-segment
+//!    closest points, pairs closer than r_a + r_b + margin;
+//! 2. free velocities evaluated explicitly from the start-of-step state,
+//!    v_free = v + dt M^-1 (F_int + F_ext), as in the paper's code, so that the
+//!    mass-only Delassus operator W = dt H^T M^-1 H is the consistent one;
+//! 3. the frictional contact problem (Signorini + Coulomb, eqs. 8-9) with the
+//!    gap closed within the step, solved by block Gauss-Seidel;
+//! 4. the implicit rod step (eq. 7) of every rod with the contact forces fixed
+//!    (F^fr of eq. 7c).
+//!
+//! Contact forces couple rods only through step 3, so each rod's Newton system
+//! stays banded and a step costs O(K) plus O(contacts * sweeps).
+use crate::contact::broad_phase::{BroadPhase, CandidatePair, Segment, neighbour_gap};
+use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions};
+use crate::contact::segment::closest_points;
+use crate::counters::Counters;
+use crate::energies::{self, Terms};
+use crate::external::{Environment, gravity};
+use crate::rod::{Rod, node_dof};
+use crate::stepper::{NewtonOptions, StepError, StepReport, Stepper};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Contact model parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactOptions {
+    /// Whether contact is detected and resolved at all.
+    pub enabled: bool,
+    /// Coulomb friction coefficient mu, eq. (9).
+    pub friction: f64,
+    /// Detection margin added to r_a + r_b, as a fraction of the largest radius;
+    /// the margin also grows with the fastest node's travel over the step.
+    pub margin: f64,
+    /// Fraction of a penetration removed within one step (1 = the paper's
+    /// "gap closed in one step"; smaller values separate interpenetrating rods
+    /// more gently).
+    pub penetration_recovery: f64,
+    /// The Gauss-Seidel stopping rule.
+    pub solver: GaussSeidelOptions,
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            friction: 0.1,
+            margin: 0.25,
+            penetration_recovery: 1.0,
+            solver: GaussSeidelOptions::default(),
+        }
+    }
+}
+
+/// What one world step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorldStepReport {
+    /// Contact candidates within the margin.
+    pub contacts: usize,
+    /// Contacts carrying a normal force.
+    pub active_contacts: usize,
+    /// Largest penetration r_a + r_b - d over the contacts at the end of the step (m, 0 if none).
+    pub max_penetration: f64,
+    /// Gauss-Seidel sweeps and final natural-map residual (relative).
+    pub contact_sweeps: usize,
+    pub contact_residual: f64,
+    /// Newton iterations and substeps summed over the rods.
+    pub newton_iterations: u32,
+    pub substeps: u32,
+}
+
+/// Why a world step failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum WorldError {
+    #[error("rod {rod}: {source}")]
+    Step { rod: usize, source: StepError },
+    #[error("contact detection: {0}")]
+    Detection(String),
+}
+
+/// Whether candidate `k` duplicates a neighbour: its closest point lies on a
+/// node shared with the adjacent segment of the same rod, and that segment also
+/// pairs with the same partner. Such an endpoint pair has a normal tilted
+/// towards the node, and closing its linearised gap would push back on a rod
+/// sliding smoothly from one segment onto the next. When both pairs meet at the
+/// shared node, the one with the lower segment index is kept.
+fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
+    const END: f64 = 1e-9;
+    let p = &pairs[k];
+    let find = |i: usize, j: usize| {
+        let key = if i < j { (i, j) } else { (j, i) };
+        pairs
+            .binary_search_by(|q| (q.i, q.j).cmp(&key))
+            .ok()
+            .map(|m| (m, key.0 == i))
+    };
+    // (this segment, partner, parameter on this segment)
+    for (me, other, param) in [(p.i, p.j, p.closest.s), (p.j, p.i, p.closest.t)] {
+        let seg = &segments[me];
+        let neighbour = if param <= END {
+            me.checked_sub(1)
+        } else if param >= 1.0 - END {
+            Some(me + 1)
+        } else {
+            None
+        };
+        let Some(n) = neighbour.filter(|&n| {
+            n < segments.len() && segments[n].body == seg.body && segments[n].index.abs_diff(seg.index) == 1
+        }) else {
+            continue;
+        };
+        if n == other {
+            continue;
+        }
+        if let Some((m, n_is_first)) = find(n, other) {
+            let q = &pairs[m];
+            let n_param = if n_is_first { q.closest.s } else { q.closest.t };
+            let n_at_shared = if n < me { n_param >= 1.0 - END } else { n_param <= END };
+            if !n_at_shared || n < me {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// Several rods, their steppers and the contact machinery with reusable buffers.
+pub struct World {
+    pub rods: Vec<Rod>,
+    steppers: Vec<Stepper>,
+    pub env: Environment,
+    pub contact: ContactOptions,
+    pub counters: Counters,
+    /// Constant external loads per rod (one entry per DOF), added to F^ext.
+    pub loads: Vec<Vec<f64>>,
+    node_offset: Vec<usize>,
+    broad: BroadPhase,
+    gauss_seidel: GaussSeidel,
+    segments: Vec<Segment>,
+    gaps: Vec<usize>,
+    contacts: Vec<ContactPoint>,
+    pair_ids: Vec<(usize, usize)>,
+    warm_ids: Vec<(usize, usize)>,
+    warm_forces: Vec<Vector3<f64>>,
+    warm: Vec<Vector3<f64>>,
+    inv_mass: Vec<f64>,
+    v_free: Vec<Vector3<f64>>,
+    forces: Vec<Vec<f64>>,
+    grad: Vec<Vec<f64>>,
+}
+
+impl World {
+    /// A world of `rods` under `env`, each stepped with `newton`.
+    pub fn new(rods: Vec<Rod>, env: Environment, contact: ContactOptions, newton: NewtonOptions) -> Self {
+        let steppers = rods.iter().map(|r| Stepper::new(r, newton)).collect();
+        let mut node_offset = Vec::with_capacity(rods.len());
+        let mut total = 0;
+        for r in &rods {
+            node_offset.push(total);
+            total += r.nodes();
+        }
+        let gaps = rods
+            .iter()
+            .map(|r| {
+                let shortest = r.rest_len.iter().cloned().fold(f64::INFINITY, f64::min);
+                neighbour_gap(2.0 * r.section.radius, shortest)
+            })
+            .collect();
+        let forces = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
+        let loads = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
+        let grad = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
+        Self {
+            rods,
+            steppers,
+            env,
+            contact,
+            counters: Counters::default(),
+            loads,
+            node_offset,
+            broad: BroadPhase::new(),
+            gauss_seidel: GaussSeidel::new(),
+            segments: Vec::new(),
+            gaps,
+            contacts: Vec::new(),
+            pair_ids: Vec::new(),
+            warm_ids: Vec::new(),
+            warm_forces: Vec::new(),
+            warm: Vec::new(),
+            inv_mass: vec![0.0; total],
+            v_free: vec![Vector3::zeros(); total],
+            forces,
+            grad,
+        }
+    }
+
+    /// The stepper of rod `i` (for its clamp reactions).
+    pub fn stepper(&self, i: usize) -> &Stepper {
+        &self.steppers[i]
+    }
+
+    /// The contacts found at the start of the last step.
+    pub fn contacts(&self) -> &[ContactPoint] {
+        &self.contacts
+    }
+
+    /// Contact forces (on the first rod of each pair) of the last step.
+    pub fn contact_forces(&self) -> &[Vector3<f64>] {
+        self.gauss_seidel.contact_forces()
+    }
+
+    /// Advances every rod by `dt`.
+    pub fn step(&mut self, dt: f64) -> Result<WorldStepReport, WorldError> {
+        self.counters.steps += 1;
+        let mut report = WorldStepReport::default();
+        for (f, l) in self.forces.iter_mut().zip(&self.loads) {
+            f.copy_from_slice(l);
+        }
+        if self.contact.enabled {
+            let mut detection = self.counters.detection;
+            Counters::time(&mut detection, || self.detect(dt))?;
+            self.counters.detection = detection;
+            report.contacts = self.contacts.len();
+            if !self.contacts.is_empty() {
+                let mut solve = self.counters.contact_solve;
+                Counters::time(&mut solve, || self.solve_contacts(dt, &mut report));
+                self.counters.contact_solve = solve;
+            }
+        }
+        let mut dynamics = self.counters.dynamics;
+        let result = Counters::time(&mut dynamics, || self.step_rods(dt, &mut report));
+        self.counters.dynamics = dynamics;
+        result?;
+        report.max_penetration = self.max_penetration();
+        Ok(report)
+    }
+
+    fn detect(&mut self, dt: f64) -> Result<(), WorldError> {
+        self.segments.clear();
+        let mut fastest: f64 = 0.0;
+        let mut largest_radius: f64 = 0.0;
+        for (b, rod) in self.rods.iter().enumerate() {
+            largest_radius = largest_radius.max(rod.section.radius);
+            for i in 0..rod.nodes() {
+                fastest = fastest.max(rod.node_velocity(i).norm());
+            }
+            for e in 0..rod.edges() {
+                self.segments.push(Segment {
+                    a: rod.node(e),
+                    b: rod.node(e + 1),
+                    radius: rod.section.radius,
+                    body: b,
+                    index: e,
+                });
+            }
+        }
+        let margin = self.contact.margin * largest_radius + 2.0 * fastest * dt;
+        let pairs = self
+            .broad
+            .find_pairs(&self.segments, &self.gaps, margin)
+            .map_err(|e| WorldError::Detection(e.to_string()))?;
+        self.contacts.clear();
+        self.pair_ids.clear();
+        for (k, p) in pairs.iter().enumerate() {
+            if redundant(pairs, k, &self.segments) {
+                continue;
+            }
+            let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
+            let (oa, ob) = (self.node_offset[sa.body], self.node_offset[sb.body]);
+            let nodes = [oa + sa.index, oa + sa.index + 1, ob + sb.index, ob + sb.index + 1];
+            if let Some(mut c) =
+                ContactPoint::from_pair(nodes, &p.closest, sa.radius + sb.radius, self.contact.friction)
+            {
+                if c.gap < 0.0 {
+                    c.gap *= self.contact.penetration_recovery;
+                }
+                self.contacts.push(c);
+                self.pair_ids.push((p.i, p.j));
+            }
+        }
+        Ok(())
+    }
+
+    fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) {
+        for (b, rod) in self.rods.iter().enumerate() {
+            let grad = &mut self.grad[b];
+            energies::evaluate(rod, Terms::ALL, grad, None);
+            let force = &mut self.forces[b];
+            force.copy_from_slice(&self.loads[b]);
+            gravity::add(rod, &self.env.gravity, force);
+            let off = self.node_offset[b];
+            for i in 0..rod.nodes() {
+                let d = node_dof(i);
+                let fixed = rod.fixed[d] || rod.fixed[d + 1] || rod.fixed[d + 2];
+                let mut v = rod.node_velocity(i);
+                if fixed {
+                    v = Vector3::new(
+                        rod.prescribed_velocity[d],
+                        rod.prescribed_velocity[d + 1],
+                        rod.prescribed_velocity[d + 2],
+                    );
+                    self.inv_mass[off + i] = 0.0;
+                } else {
+                    let m = rod.mass[d];
+                    let damp = 1.0 / (1.0 + self.env.damping * dt);
+                    for c in 0..3 {
+                        v[c] = damp * (v[c] + dt * (force[d + c] - grad[d + c]) / m);
+                    }
+                    self.inv_mass[off + i] = damp / m;
+                }
+                self.v_free[off + i] = v;
+            }
+            force.copy_from_slice(&self.loads[b]);
+        }
+        // Warm start from the previous step's forces on the same segment pairs.
+        self.warm.clear();
+        let mut k = 0;
+        for id in &self.pair_ids {
+            while k < self.warm_ids.len() && self.warm_ids[k] < *id {
+                k += 1;
+            }
+            let f = if k < self.warm_ids.len() && self.warm_ids[k] == *id {
+                self.warm_forces[k]
+            } else {
+                Vector3::zeros()
+            };
+            self.warm.push(f);
+        }
+        let solved = self.gauss_seidel.solve(
+            &self.contacts,
+            &self.inv_mass,
+            &self.v_free,
+            dt,
+            &self.contact.solver,
+            Some(&self.warm),
+        );
+        let Ok(sol) = solved else {
+            return;
+        };
+        report.contact_sweeps = sol.sweeps;
+        report.contact_residual = sol.residual;
+        report.active_contacts = self
+            .gauss_seidel
+            .contact_forces()
+            .iter()
+            .zip(&self.contacts)
+            .filter(|(f, c)| f.dot(&c.normal) > 0.0)
+            .count();
+        let node_forces = self.gauss_seidel.node_forces();
+        for (b, rod) in self.rods.iter().enumerate() {
+            let off = self.node_offset[b];
+            for i in 0..rod.nodes() {
+                let d = node_dof(i);
+                for c in 0..3 {
+                    self.forces[b][d + c] += node_forces[off + i][c];
+                }
+            }
+        }
+        self.warm_ids.clear();
+        self.warm_ids.extend_from_slice(&self.pair_ids);
+        self.warm_forces.clear();
+        self.warm_forces.extend_from_slice(self.gauss_seidel.contact_forces());
+    }
+
+    fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
+        for (b, (rod, stepper)) in self.rods.iter_mut().zip(&mut self.steppers).enumerate() {
+            if rod.fixed.iter().all(|f| *f) && rod.prescribed_velocity.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            let r: StepReport = stepper
+                .step(rod, &self.env, Some(&self.forces[b]), dt)
+                .map_err(|source| WorldError::Step { rod: b, source })?;
+            report.newton_iterations += r.newton_iterations;
+            report.substeps += r.substeps;
+        }
+        Ok(())
+    }
+
+    /// Largest penetration over the detected pairs at the current positions.
+    fn max_penetration(&self) -> f64 {
+        let mut worst: f64 = 0.0;
+        for &(i, j) in &self.pair_ids {
+            let (sa, sb) = (&self.segments[i], &self.segments[j]);
+            let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
+            let cp = closest_points(
+                &ra.node(sa.index),
+                &ra.node(sa.index + 1),
+                &rb.node(sb.index),
+                &rb.node(sb.index + 1),
+            );
+            worst = worst.max(sa.radius + sb.radius - cp.distance);
+        }
+        worst
+    }
+}

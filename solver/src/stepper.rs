@@ -1,0 +1,318 @@
+//! Implicit Euler time stepping with Newton's method, eq. (7):
+//! M/dt ((q_new - q_old)/dt - v_old) - F_int(q_new) - F_ext = 0.
+//!
+//! Each Newton iterate solves the banded system (M/dt^2 + H) dq = -r in time
+//! linear in K, with a backtracking line search on the incremental potential
+//! Phi(q) = 1/(2 dt^2) |q - q_old - dt v_old|_M^2 + E(q) - F_ext.q whose gradient
+//! is the residual r. A step whose Newton iteration fails is retried as two half
+//! steps, up to `max_halvings` times; then the step ends with a `StepError`.
+//! Viscous damping F = -gamma M v (v = (q - q_old)/dt) folds into the inertia
+//! coefficient: (1 + gamma dt)/dt^2 M (q - q_old) - M v_old/dt.
+use crate::energies::{self, BANDWIDTH, Energies, Terms};
+use crate::external::{Environment, gravity};
+use crate::linalg::banded::{BandedLdlt, BandedSym};
+use crate::rod::{End, Rod};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Newton and time-step control.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NewtonOptions {
+    /// Convergence: every free force entry below `rtol * F_s` and every free
+    /// moment entry below `rtol * F_s * mean edge length`, where F_s is the
+    /// problem's force scale (`force_scale`, by default EI/L^2 plus the weight).
+    /// The force tolerance never drops below the roundoff floor of the
+    /// stretching forces, 100 eps EA X / l_e (X: largest coordinate, l_e: mean
+    /// edge length), which no iterate can beat.
+    pub rtol: f64,
+    /// Force scale F_s (N); `None` takes EI/L^2 + |g| rho A L.
+    pub force_scale: Option<f64>,
+    /// Newton iterations per attempt.
+    pub max_iterations: u32,
+    /// Line-search halvings per Newton iterate.
+    pub max_backtracks: u32,
+    /// Time-step halvings before a step is declared failed.
+    pub max_halvings: u32,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        Self {
+            rtol: 1e-6,
+            force_scale: None,
+            max_iterations: 30,
+            max_backtracks: 12,
+            max_halvings: 8,
+        }
+    }
+}
+
+/// What one call to `Stepper::step` did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepReport {
+    /// Substeps taken (1 unless Newton failed and the step was split).
+    pub substeps: u32,
+    /// Smallest substep used (s).
+    pub min_dt: f64,
+    /// Newton iterations summed over the substeps (failed attempts included).
+    pub newton_iterations: u32,
+    /// Largest free-DOF force residual at convergence (N).
+    pub residual: f64,
+    /// Negative pivots of the last Newton matrix (an indefinite Hessian).
+    pub negative_pivots: usize,
+    /// Elastic energies at the end of the step.
+    pub energies: Energies,
+}
+
+/// Why a time step failed.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum StepError {
+    #[error("Newton's method failed after {halvings} time-step halvings (dt down to {dt:.3e} s): {reason}")]
+    NotConverged {
+        halvings: u32,
+        dt: f64,
+        reason: NewtonFailure,
+    },
+}
+
+/// Why one Newton solve failed.
+#[derive(Debug, Error, Clone, Copy, PartialEq)]
+pub enum NewtonFailure {
+    #[error("the Newton matrix could not be factorised")]
+    Singular,
+    #[error("the Newton direction is not a descent direction (indefinite Hessian)")]
+    NotDescent,
+    #[error("the line search found no decrease")]
+    LineSearch,
+    #[error("no convergence within the iteration cap (scaled residual {0:.3e})")]
+    IterationCap(f64),
+}
+
+/// Implicit Euler stepper for one rod; owns every buffer of the Newton loop so
+/// that a step allocates nothing.
+#[derive(Clone, Debug)]
+pub struct Stepper {
+    pub options: NewtonOptions,
+    grad: Vec<f64>,
+    resid: Vec<f64>,
+    ext: Vec<f64>,
+    delta: Vec<f64>,
+    q_base: Vec<f64>,
+    hess: BandedSym,
+    ldlt: BandedLdlt,
+}
+
+struct Attempt {
+    iterations: u32,
+    residual: f64,
+    negative_pivots: usize,
+    energies: Energies,
+}
+
+impl Stepper {
+    /// A stepper sized for `rod`.
+    pub fn new(rod: &Rod, options: NewtonOptions) -> Self {
+        let n = rod.ndof();
+        Self {
+            options,
+            grad: vec![0.0; n],
+            resid: vec![0.0; n],
+            ext: vec![0.0; n],
+            delta: vec![0.0; n],
+            q_base: vec![0.0; n],
+            hess: BandedSym::new(n, BANDWIDTH),
+            ldlt: BandedLdlt::with_capacity(n, BANDWIDTH),
+        }
+    }
+
+    /// Advances `rod` by `dt` under `env` and the constant extra forces `extra`
+    /// (e.g. contact forces, eq. 7c), splitting the step when Newton fails.
+    pub fn step(
+        &mut self,
+        rod: &mut Rod,
+        env: &Environment,
+        extra: Option<&[f64]>,
+        dt: f64,
+    ) -> Result<StepReport, StepError> {
+        self.ext.fill(0.0);
+        gravity::add(rod, &env.gravity, &mut self.ext);
+        if let Some(f) = extra {
+            for (e, x) in self.ext.iter_mut().zip(f) {
+                *e += x;
+            }
+        }
+        let mut report = StepReport {
+            min_dt: dt,
+            ..Default::default()
+        };
+        let mut remaining = dt;
+        let mut h = dt;
+        let mut halvings = 0;
+        while remaining > 1e-12 * dt {
+            h = h.min(remaining);
+            match self.attempt(rod, env, h) {
+                Ok(a) => {
+                    rod.accept_step(h);
+                    remaining -= h;
+                    report.substeps += 1;
+                    report.newton_iterations += a.iterations;
+                    report.residual = a.residual;
+                    report.negative_pivots = a.negative_pivots;
+                    report.energies = a.energies;
+                    report.min_dt = report.min_dt.min(h);
+                }
+                Err((reason, iterations)) => {
+                    rod.restore();
+                    report.newton_iterations += iterations;
+                    halvings += 1;
+                    if halvings > self.options.max_halvings {
+                        return Err(StepError::NotConverged { halvings: halvings - 1, dt: h, reason });
+                    }
+                    h /= 2.0;
+                }
+            }
+        }
+        Ok(report)
+    }
+
+    /// Force the clamp at `end` exerts on the rod after the last step (N), and
+    /// its torque about the end edge (N m).
+    pub fn clamp_reaction(&self, rod: &Rod, end: End) -> (Vector3<f64>, f64) {
+        let d = rod.clamp_dofs(end);
+        let f = Vector3::new(
+            self.resid[d[0]] + self.resid[d[3]],
+            self.resid[d[1]] + self.resid[d[4]],
+            self.resid[d[2]] + self.resid[d[5]],
+        );
+        (f, self.resid[d[6]])
+    }
+
+    /// The problem's force scale F_s (N) used by the convergence test.
+    pub fn force_scale(&self, rod: &Rod, env: &Environment) -> f64 {
+        self.options.force_scale.unwrap_or_else(|| {
+            let l = rod.length();
+            rod.section.ei / (l * l) + env.gravity.norm() * rod.section.linear_density * l
+        })
+    }
+
+    fn attempt(&mut self, rod: &mut Rod, env: &Environment, h: f64) -> Result<Attempt, (NewtonFailure, u32)> {
+        let gamma = env.damping;
+        let c_in = (1.0 + gamma * h) / (h * h);
+        let edge = rod.length() / rod.edges() as f64;
+        let extent = rod.q_old.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(rod.length());
+        let floor = 100.0 * f64::EPSILON * rod.section.ea * extent / edge;
+        let f_tol = (self.options.rtol * self.force_scale(rod, env)).max(floor);
+        let m_tol = f_tol * edge;
+        for j in 0..rod.ndof() {
+            let v = if rod.fixed[j] { rod.prescribed_velocity[j] } else { rod.velocity[j] };
+            rod.q[j] = rod.q_old[j] + h * v;
+        }
+        rod.update_geometry();
+        let mut energies = energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
+        let mut phi = self.residual_and_potential(rod, h, c_in, energies.total());
+        let mut scaled = scaled_norm(rod, &self.resid, f_tol, m_tol);
+        let mut negative_pivots = 0;
+        for iteration in 0..self.options.max_iterations {
+            if scaled <= 1.0 {
+                return Ok(Attempt {
+                    iterations: iteration,
+                    residual: force_norm(rod, &self.resid),
+                    negative_pivots,
+                    energies,
+                });
+            }
+            for j in 0..rod.ndof() {
+                self.hess.add_diagonal(j, c_in * rod.mass[j]);
+                if rod.fixed[j] {
+                    self.hess.constrain(j);
+                }
+            }
+            let inertia = self.ldlt.factor(&self.hess).map_err(|_| (NewtonFailure::Singular, iteration))?;
+            negative_pivots = inertia.negative;
+            let mut slope = 0.0;
+            for j in 0..rod.ndof() {
+                self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
+            }
+            self.ldlt.solve_in_place(&mut self.delta);
+            for j in 0..rod.ndof() {
+                if !rod.fixed[j] {
+                    slope += self.resid[j] * self.delta[j];
+                }
+            }
+            if !(slope < 0.0) {
+                return Err((NewtonFailure::NotDescent, iteration));
+            }
+            self.q_base.copy_from_slice(&rod.q);
+            let mut alpha = 1.0;
+            let mut backtracks = 0;
+            loop {
+                for ((q, b), d) in rod.q.iter_mut().zip(&self.q_base).zip(&self.delta) {
+                    *q = b + alpha * d;
+                }
+                rod.update_geometry();
+                let trial = energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
+                let phi_trial = self.residual_and_potential(rod, h, c_in, trial.total());
+                let scaled_trial = scaled_norm(rod, &self.resid, f_tol, m_tol);
+                let finite = phi_trial.is_finite() && scaled_trial.is_finite();
+                if finite && (phi_trial <= phi + 1e-4 * alpha * slope || scaled_trial < scaled) {
+                    energies = trial;
+                    phi = phi_trial;
+                    scaled = scaled_trial;
+                    break;
+                }
+                backtracks += 1;
+                if backtracks > self.options.max_backtracks {
+                    return Err((NewtonFailure::LineSearch, iteration + 1));
+                }
+                alpha *= 0.5;
+            }
+        }
+        if scaled <= 1.0 {
+            return Ok(Attempt {
+                iterations: self.options.max_iterations,
+                residual: force_norm(rod, &self.resid),
+                negative_pivots,
+                energies,
+            });
+        }
+        Err((NewtonFailure::IterationCap(scaled), self.options.max_iterations))
+    }
+
+    /// Fills the residual r = grad Phi for every DOF (at a fixed DOF it is the
+    /// reaction the constraint supplies) and returns Phi over the free DOFs.
+    fn residual_and_potential(&mut self, rod: &Rod, h: f64, c_in: f64, elastic: f64) -> f64 {
+        let mut phi = elastic;
+        for j in 0..rod.ndof() {
+            let m = rod.mass[j];
+            let dq = rod.q[j] - rod.q_old[j];
+            let inertia = c_in * m * dq - m * rod.velocity[j] / h;
+            self.resid[j] = inertia + self.grad[j] - self.ext[j];
+            if !rod.fixed[j] {
+                let target = rod.velocity[j] / (h * c_in);
+                phi += 0.5 * c_in * m * (dq - target) * (dq - target) - self.ext[j] * rod.q[j];
+            }
+        }
+        phi
+    }
+}
+
+/// max over free DOFs of |r_j| / tol_j (forces against `f_tol`, moments against `m_tol`).
+fn scaled_norm(rod: &Rod, r: &[f64], f_tol: f64, m_tol: f64) -> f64 {
+    let mut s: f64 = 0.0;
+    for (j, v) in r.iter().enumerate() {
+        if !rod.fixed[j] {
+            let tol = if j % 4 == 3 { m_tol } else { f_tol };
+            s = s.max(v.abs() / tol);
+        }
+    }
+    s
+}
+
+/// Largest free force (not moment) residual entry (N).
+fn force_norm(rod: &Rod, r: &[f64]) -> f64 {
+    r.iter()
+        .enumerate()
+        .filter(|(j, _)| !rod.fixed[*j] && j % 4 != 3)
+        .fold(0.0, |m, (_, v)| m.max(v.abs()))
+}

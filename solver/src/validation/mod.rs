@@ -1,0 +1,347 @@
+//! The validation suite: each case compares the solver with an independent
+//! expectation (finite differences, invariance, analytic or elastica solutions).
+//! `knotsweep validate` prints these rows; the tests assert the same code.
+pub mod contact;
+pub mod derivatives;
+pub mod dynamics;
+pub mod elastica;
+pub mod rng;
+pub mod statics;
+
+use crate::energies::Terms;
+use serde::{Deserialize, Serialize};
+
+/// One row of the validation table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// Short identifier, e.g. `euler_buckling`.
+    pub case: String,
+    /// What is compared, with units.
+    pub quantity: String,
+    /// The independent expectation.
+    pub expected: f64,
+    /// What the solver gives.
+    pub got: f64,
+    /// The error measure (relative unless the quantity says otherwise).
+    pub error: f64,
+    /// The largest error that passes.
+    pub tolerance: f64,
+    pub pass: bool,
+}
+
+impl CaseResult {
+    fn relative(case: &str, quantity: &str, expected: f64, got: f64, tolerance: f64) -> Self {
+        let error = ((got - expected) / expected).abs();
+        Self::with_error(case, quantity, expected, got, error, tolerance)
+    }
+
+    fn with_error(case: &str, quantity: &str, expected: f64, got: f64, error: f64, tolerance: f64) -> Self {
+        Self {
+            case: case.to_string(),
+            quantity: quantity.to_string(),
+            expected,
+            got,
+            error,
+            tolerance,
+            pass: error <= tolerance,
+        }
+    }
+
+    fn failed(case: &str, quantity: &str, reason: impl std::fmt::Display) -> Self {
+        Self {
+            case: case.to_string(),
+            quantity: format!("{quantity} (failed: {reason})"),
+            expected: f64::NAN,
+            got: f64::NAN,
+            error: f64::INFINITY,
+            tolerance: 0.0,
+            pass: false,
+        }
+    }
+}
+
+/// A validation case: its name and the function that runs it.
+pub struct Case {
+    pub name: &'static str,
+    pub run: fn() -> Vec<CaseResult>,
+}
+
+/// Every case of the suite, cheapest first.
+pub fn all_cases() -> Vec<Case> {
+    let mut cases = rod_cases();
+    cases.extend(contact_cases());
+    cases
+}
+
+/// The contact cases, cheapest first.
+pub fn contact_cases() -> Vec<Case> {
+    vec![
+        Case { name: "broad_phase", run: broad_phase_rows },
+        Case { name: "crossing_rods", run: crossing_rows },
+        Case { name: "inclined_rod", run: inclined_rows },
+        Case { name: "frictionless_bounce", run: bounce_rows },
+        Case { name: "interpenetration", run: interpenetration_rows },
+        Case { name: "capstan", run: capstan_rows },
+    ]
+}
+
+fn broad_phase_rows() -> Vec<CaseResult> {
+    let (found, brute, mismatched) = contact::broad_phase_vs_brute_force();
+    vec![CaseResult::with_error(
+        "broad_phase",
+        &format!("pairs missed or extra vs brute force ({found} found, {brute} brute), (2,7) torus knot, K = 301"),
+        0.0,
+        mismatched as f64,
+        mismatched as f64,
+        0.0,
+    )]
+}
+
+fn crossing_rows() -> Vec<CaseResult> {
+    match contact::crossing_rods_pressed() {
+        Ok((worst, _, passed)) => vec![
+            CaseResult::with_error("crossing_penetration", "largest penetration / h while pressed and held", 0.0, worst, worst, 0.01),
+            CaseResult::with_error(
+                "crossing_no_pass_through",
+                "upper centre line ever below the lower (1 = yes)",
+                0.0,
+                f64::from(u8::from(passed)),
+                f64::from(u8::from(passed)),
+                0.0,
+            ),
+        ],
+        Err(e) => vec![CaseResult::failed("crossing_penetration", "penetration", e)],
+    }
+}
+
+fn inclined_rows() -> Vec<CaseResult> {
+    let mut rows = Vec::new();
+    for (deg, mu) in [(10.0f64, 0.3), (30.0, 0.3), (20.0, 0.1)] {
+        let name = format!("inclined_{deg}deg_mu{mu}");
+        match contact::inclined_rod(deg.to_radians(), mu) {
+            Ok((a, expected)) if expected == 0.0 => rows.push(CaseResult::with_error(
+                &name,
+                "sticks: |acceleration| / g (tan alpha < mu)",
+                0.0,
+                a,
+                (a / 9.81).abs(),
+                1e-4,
+            )),
+            Ok((a, expected)) => rows.push(CaseResult::relative(
+                &name,
+                "slides: acceleration g (sin a - mu cos a) (m/s^2)",
+                expected,
+                a,
+                0.05,
+            )),
+            Err(e) => rows.push(CaseResult::failed(&name, "acceleration", e)),
+        }
+    }
+    rows
+}
+
+fn bounce_rows() -> Vec<CaseResult> {
+    match contact::frictionless_bounce() {
+        Ok((worst, last)) => vec![CaseResult::with_error(
+            "bounce_no_energy_gain",
+            &format!("max total energy / E0 - 1, mu = 0, no damping (final E/E0 = {last:.3})"),
+            0.0,
+            worst - 1.0,
+            (worst - 1.0).max(0.0),
+            1e-9,
+        )],
+        Err(e) => vec![CaseResult::failed("bounce_no_energy_gain", "energy", e)],
+    }
+}
+
+fn interpenetration_rows() -> Vec<CaseResult> {
+    match contact::interpenetration_recovery() {
+        Ok((gap, fastest)) => vec![
+            CaseResult::with_error(
+                "interpenetration_separates",
+                "final gap / h >= 0 after starting 0.2 h interpenetrated",
+                0.0,
+                gap,
+                (-gap).max(0.0),
+                0.0,
+            ),
+            CaseResult::with_error(
+                "interpenetration_no_explosion",
+                "largest node speed (m/s) vs 2 * penetration / dt = 0.4 m/s",
+                0.4,
+                fastest,
+                fastest / 0.4,
+                1.0,
+            ),
+        ],
+        Err(e) => vec![CaseResult::failed("interpenetration_separates", "gap", e)],
+    }
+}
+
+fn capstan_rows() -> Vec<CaseResult> {
+    let mut rows = Vec::new();
+    for (mu, turns) in [(0.1, 0.5), (0.3, 0.5), (0.1, 1.0), (0.3, 1.0)] {
+        let phi = turns * std::f64::consts::TAU;
+        let name = format!("capstan_mu{mu}_phi{}pi", 2.0 * turns);
+        match contact::capstan(mu, phi) {
+            Ok((ratio, expected)) => rows.push(CaseResult::relative(
+                &name,
+                "tension ratio at slip exp(mu phi)",
+                expected,
+                ratio,
+                0.10,
+            )),
+            Err(e) => rows.push(CaseResult::failed(&name, "tension ratio", e)),
+        }
+    }
+    rows
+}
+
+/// The rod-solver cases (no contact), cheapest first.
+pub fn rod_cases() -> Vec<Case> {
+    vec![
+        Case { name: "derivatives", run: derivative_rows },
+        Case { name: "rigid_motion", run: rigid_motion_rows },
+        Case { name: "twist", run: twist_rows },
+        Case { name: "euler_buckling", run: buckling_rows },
+        Case { name: "cantilever", run: cantilever_rows },
+        Case { name: "energy", run: energy_rows },
+    ]
+}
+
+fn derivative_rows() -> Vec<CaseResult> {
+    let terms = [
+        ("stretching", Terms { stretching: true, bending: false, twisting: false }),
+        ("bending", Terms { stretching: false, bending: true, twisting: false }),
+        ("twisting", Terms { stretching: false, bending: false, twisting: true }),
+        ("total", Terms::ALL),
+    ];
+    let mut rows = Vec::new();
+    for (name, t) in terms {
+        let mut worst_g: f64 = 0.0;
+        let mut worst_h: f64 = 0.0;
+        for seed in 0..4 {
+            let mut rod = derivatives::sample_rod(seed);
+            worst_g = worst_g.max(derivatives::gradient_error(&mut rod, t));
+            worst_h = worst_h.max(derivatives::hessian_error(&mut rod, t));
+        }
+        rows.push(CaseResult::with_error(
+            &format!("gradient_{name}"),
+            "max rel. 2-norm error vs central FD (4 random rods)",
+            0.0,
+            worst_g,
+            worst_g,
+            1e-6,
+        ));
+        rows.push(CaseResult::with_error(
+            &format!("hessian_{name}"),
+            "max rel. Frobenius error vs symmetrised FD Jacobian",
+            0.0,
+            worst_h,
+            worst_h,
+            1e-6,
+        ));
+    }
+    rows
+}
+
+fn rigid_motion_rows() -> Vec<CaseResult> {
+    let (mut de, mut f, mut t) = (0.0f64, 0.0f64, 0.0f64);
+    for seed in 0..4 {
+        let (a, b, c) = derivatives::rigid_motion_errors(seed);
+        de = de.max(a);
+        f = f.max(b);
+        t = t.max(c);
+    }
+    vec![
+        CaseResult::with_error("rigid_energy", "rel. energy change, rotation+translation", 0.0, de, de, 1e-12),
+        CaseResult::with_error("rigid_net_force", "|sum f_i| / max|f_i|", 0.0, f, f, 1e-12),
+        CaseResult::with_error("rigid_net_torque", "|sum x_i x f_i + m_e t_e| / (max|f| max|x|)", 0.0, t, t, 1e-12),
+    ]
+}
+
+fn twist_rows() -> Vec<CaseResult> {
+    match statics::twisted_rod(1.0) {
+        Ok((e, e_exp, m, m_exp)) => vec![
+            CaseResult::relative("twist_energy", "twist energy GJ phi^2/(2 L) (J), phi = 1", e_exp, e, 1e-6),
+            CaseResult::relative("twist_torque", "end torque GJ phi/L (N m)", m_exp, m, 1e-6),
+        ],
+        Err(e) => vec![CaseResult::failed("twist", "twist energy", e)],
+    }
+}
+
+fn buckling_rows() -> Vec<CaseResult> {
+    match statics::euler_buckling(101) {
+        Ok((load, euler, _)) => vec![CaseResult::relative(
+            "euler_buckling",
+            "critical load 4 pi^2 EI/L^2 (N), clamped-clamped, K = 101",
+            euler,
+            load,
+            0.03,
+        )],
+        Err(e) => vec![CaseResult::failed("euler_buckling", "critical load", e)],
+    }
+}
+
+fn cantilever_rows() -> Vec<CaseResult> {
+    let small = 0.01;
+    let large = 5.0;
+    let mut rows = Vec::new();
+    match statics::cantilever(small, 101, 1) {
+        Ok((w, l)) => rows.push(CaseResult::relative(
+            "cantilever_small",
+            "tip deflection q L^4/(8 EI) (m), qL^3/EI = 0.01",
+            small / 8.0 * l,
+            w,
+            0.02,
+        )),
+        Err(e) => rows.push(CaseResult::failed("cantilever_small", "tip deflection", e)),
+    }
+    match statics::cantilever(large, 101, 10) {
+        Ok((w, l)) => rows.push(CaseResult::relative(
+            "cantilever_large",
+            "tip deflection vs elastica shooting (m), qL^3/EI = 5",
+            statics::elastica_tip(large) * l,
+            w,
+            0.02,
+        )),
+        Err(e) => rows.push(CaseResult::failed("cantilever_large", "tip deflection", e)),
+    }
+    rows
+}
+
+fn energy_rows() -> Vec<CaseResult> {
+    let mut rows = Vec::new();
+    match dynamics::released_bent_rod(0.0) {
+        Ok(r) => {
+            rows.push(CaseResult::relative(
+                "energy_implicit_euler",
+                "energy lost = implicit-Euler dissipation sum(|dv|_M^2 + (g1-g0).dq)/2 (J)",
+                r.predicted_loss,
+                r.energy_loss,
+                0.02,
+            ));
+            rows.push(CaseResult::with_error(
+                "energy_no_gain",
+                "largest step-to-step energy gain / E0",
+                0.0,
+                r.max_gain,
+                r.max_gain.max(0.0),
+                1e-9,
+            ));
+        }
+        Err(e) => rows.push(CaseResult::failed("energy_implicit_euler", "energy", e)),
+    }
+    match dynamics::released_bent_rod(5.0) {
+        Ok(r) => rows.push(CaseResult::with_error(
+            "energy_damped_monotone",
+            "largest step-to-step energy gain / E0, damping 5/s",
+            0.0,
+            r.max_gain,
+            r.max_gain.max(0.0),
+            0.0,
+        )),
+        Err(e) => rows.push(CaseResult::failed("energy_damped_monotone", "energy", e)),
+    }
+    rows
+}

@@ -1,0 +1,44 @@
+//! The contact validation suite (the contact rows of `knotsweep validate`), asserted.
+use solver::validation;
+
+fn assert_case(name: &str) {
+    let case = validation::contact_cases()
+        .into_iter()
+        .find(|c| c.name == name)
+        .expect("case exists");
+    let rows = (case.run)();
+    assert!(!rows.is_empty());
+    for r in &rows {
+        assert!(r.pass, "{} failed: expected {:e}, got {:e}, error {:e} > {:e} ({})", r.case, r.expected, r.got, r.error, r.tolerance, r.quantity);
+    }
+}
+
+#[test]
+fn broad_phase_finds_exactly_the_brute_force_pairs() {
+    assert_case("broad_phase");
+}
+
+#[test]
+fn crossing_rods_pressed_together_never_pass_through() {
+    assert_case("crossing_rods");
+}
+
+#[test]
+fn rod_on_inclined_rod_sticks_or_slides_per_coulomb() {
+    assert_case("inclined_rod");
+}
+
+#[test]
+fn frictionless_bounce_gains_no_energy() {
+    assert_case("frictionless_bounce");
+}
+
+#[test]
+fn interpenetrating_rods_separate_gently() {
+    assert_case("interpenetration");
+}
+
+#[test]
+fn capstan_tension_ratio_is_exp_mu_phi() {
+    assert_case("capstan");
+}

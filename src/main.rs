@@ -1,6 +1,11 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
+mod plot;
+mod run;
+mod serve;
+mod sweep;
 mod validate;
+mod worker;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -17,6 +22,14 @@ struct Cli {
 enum Command {
     /// Run the solver's validation suite and print a table of expected vs got.
     Validate(validate::Args),
+    /// Run one overhand-knot tightening case (paper Sec. 4).
+    Run(run::Args),
+    /// Serve the sweep API (and run cases on this machine's cores).
+    Serve(serve::Args),
+    /// Add workers to the queue of a server's database.
+    Worker(worker::Args),
+    /// Run a sweep locally (resumable) and write its phase diagram.
+    Sweep(sweep::Args),
 }
 
 fn main() {
@@ -27,6 +40,10 @@ fn main() {
     let cli = Cli::parse();
     let result: Result<()> = match cli.command {
         Command::Validate(args) => validate::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Serve(args) => serve::run(args),
+        Command::Worker(args) => worker::run(args),
+        Command::Sweep(args) => sweep::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -4,6 +4,7 @@
 //! Layout follows the paper: `rod` (DOFs and frames, Sec. 3.1), `energies`
 //! (eq. 6), `external` (eq. 7c), `stepper` (eq. 7), `contact` (Sec. 3.2).
 //! Pure computation: no I/O, deterministic for given inputs.
+pub mod case;
 pub mod contact;
 pub mod counters;
 pub mod energies;
@@ -11,7 +12,9 @@ pub mod external;
 pub mod knot;
 pub mod linalg;
 pub mod material;
+pub mod measurements;
 pub mod pipeline;
+pub mod protocol;
 pub mod rod;
 pub mod simplified;
 pub mod stepper;

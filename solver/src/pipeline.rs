@@ -127,6 +127,7 @@ fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
 }
 
 /// Several rods, their steppers and the contact machinery with reusable buffers.
+#[derive(Clone)]
 pub struct World {
     pub rods: Vec<Rod>,
     steppers: Vec<Stepper>,

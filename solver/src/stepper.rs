@@ -213,6 +213,7 @@ impl Stepper {
         let mut phi = self.residual_and_potential(rod, h, c_in, energies.total());
         let mut scaled = scaled_norm(rod, &self.resid, f_tol, m_tol);
         let mut negative_pivots = 0;
+        let mut hessian_current = true;
         for iteration in 0..self.options.max_iterations {
             if scaled <= 1.0 {
                 return Ok(Attempt {
@@ -221,6 +222,9 @@ impl Stepper {
                     negative_pivots,
                     energies,
                 });
+            }
+            if !hessian_current {
+                energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
             }
             for j in 0..rod.ndof() {
                 self.hess.add_diagonal(j, c_in * rod.mass[j]);
@@ -240,7 +244,7 @@ impl Stepper {
                     slope += self.resid[j] * self.delta[j];
                 }
             }
-            if !(slope < 0.0) {
+            if slope >= 0.0 || slope.is_nan() {
                 return Err((NewtonFailure::NotDescent, iteration));
             }
             self.q_base.copy_from_slice(&rod.q);
@@ -251,7 +255,8 @@ impl Stepper {
                     *q = b + alpha * d;
                 }
                 rod.update_geometry();
-                let trial = energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
+                // Gradient only: the Hessian is assembled if another iteration follows.
+                let trial = energies::evaluate(rod, Terms::ALL, &mut self.grad, None);
                 let phi_trial = self.residual_and_potential(rod, h, c_in, trial.total());
                 let scaled_trial = scaled_norm(rod, &self.resid, f_tol, m_tol);
                 let finite = phi_trial.is_finite() && scaled_trial.is_finite();
@@ -259,6 +264,7 @@ impl Stepper {
                     energies = trial;
                     phi = phi_trial;
                     scaled = scaled_trial;
+                    hessian_current = false;
                     break;
                 }
                 backtracks += 1;

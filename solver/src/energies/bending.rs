@@ -2,13 +2,13 @@
 //! with the material curvatures of eq. (4) and the undeformed Voronoi length l_i.
 //! The rod is naturally straight (k^ = 0); EI1 = EI2 = EI for a circular section.
 use super::twisting::scatter_gradient;
-use super::{Local, scatter_stencil};
+use super::{Local, add_outer_lower, scatter_stencil};
 use crate::rod::Rod;
 use nalgebra::{Matrix3, SVector, Vector3};
 
-/// Energy, gradient and Hessian of interior node `i` over the stencil
-/// [x_{i-1}, th_{i-1}, x_i, th_i, x_{i+1}].
-pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) {
+/// Adds the gradient and (lower) Hessian of interior node `i` over the stencil
+/// [x_{i-1}, th_{i-1}, x_i, th_i, x_{i+1}] to `out` and returns its energy.
+pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) -> f64 {
     let g = &rod.geo;
     let ei_l = rod.section.ei / rod.voronoi[i];
     let [k1, k2] = g.kappa[i];
@@ -20,7 +20,7 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) {
     let tt = (te + tf) / chi;
     let mt1 = (m1e + m1f) / chi;
     let mt2 = (m2e + m2f) / chi;
-    out.energy = 0.5 * ei_l * (k1 * k1 + k2 * k2);
+    let energy = 0.5 * ei_l * (k1 * k1 + k2 * k2);
 
     let tf_x_m2 = tf.cross(&mt2);
     let te_x_m2 = te.cross(&mt2);
@@ -42,9 +42,10 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) {
         -0.5 * kb.dot(&m2e),
         -0.5 * kb.dot(&m2f),
     );
-    out.grad = (gk1 * k1 + gk2 * k2) * ei_l;
+    out.grad.axpy(ei_l * k1, &gk1, 1.0);
+    out.grad.axpy(ei_l * k2, &gk2, 1.0);
     if !with_hessian {
-        return;
+        return energy;
     }
     let id = Matrix3::identity();
     let outer = |a: &Vector3<f64>, b: &Vector3<f64>| a * b.transpose();
@@ -72,8 +73,7 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) {
     // Second derivatives along th: d2/dth_e^2, d2/dth_f^2 (no th_e th_f coupling).
     let dthe2 = k1 * (-0.5 * kb.dot(&m2e)) + k2 * (0.5 * kb.dot(&m1e));
     let dthf2 = k1 * (-0.5 * kb.dot(&m2f)) + k2 * (0.5 * kb.dot(&m1f));
-    out.hess.fill(0.0);
-    scatter_stencil(&mut out.hess, &a, &b, &c, (1.0, dthe2, dthf2));
+    scatter_stencil(&mut out.hess, &a, &b, &c, (ei_l, ei_l * dthe2, ei_l * dthf2));
     // Mixed (position, th) derivatives, combined over k1 and k2.
     let mixed = |m1: &Vector3<f64>, m2: &Vector3<f64>| {
         let de = (tt * (0.5 * (k1 * kb.dot(m1) + k2 * kb.dot(m2))) - tf.cross(&(m1 * k1 + m2 * k2)) / chi) / ne;
@@ -84,12 +84,15 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) {
         let (de, df) = mixed(&m1, &m2);
         let mut v = SVector::<f64, 11>::zeros();
         scatter_gradient(&mut v, &de, &df, 0.0, 0.0);
-        for r in [0usize, 1, 2, 4, 5, 6, 8, 9, 10] {
-            out.hess[(r, col)] += v[r];
-            out.hess[(col, r)] += v[r];
+        // Lower triangle: entries below the th column, right of the th row.
+        for r in col + 1..11 {
+            out.hess[(r, col)] += ei_l * v[r];
+        }
+        for k in 0..col {
+            out.hess[(col, k)] += ei_l * v[k];
         }
     }
-    out.hess.gerc(1.0, &gk1, &gk1, 1.0);
-    out.hess.gerc(1.0, &gk2, &gk2, 1.0);
-    out.hess *= ei_l;
+    add_outer_lower(&mut out.hess, ei_l, &gk1);
+    add_outer_lower(&mut out.hess, ei_l, &gk2);
+    energy
 }

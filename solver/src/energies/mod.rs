@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 pub const BANDWIDTH: usize = 10;
 
 /// Energy, gradient and Hessian of one stencil over `N` consecutive DOFs.
+/// Only the lower triangle of `hess` is kept (the Hessian is symmetric).
 #[derive(Clone, Debug)]
 pub struct Local<const N: usize> {
     pub energy: f64,
@@ -87,30 +88,20 @@ pub fn evaluate(rod: &Rod, terms: Terms, grad: &mut [f64], mut hess: Option<&mut
         }
     }
     if terms.bending || terms.twisting {
-        let mut sum = Local::<11>::default();
         let mut local = Local::<11>::default();
         for i in 1..rod.nodes() - 1 {
-            sum.grad.fill(0.0);
+            local.energy = 0.0;
+            local.grad.fill(0.0);
             if with_h {
-                sum.hess.fill(0.0);
+                local.hess.fill(0.0);
             }
             if terms.bending {
-                bending::node(rod, i, with_h, &mut local);
-                out.bending += local.energy;
-                sum.grad += local.grad;
-                if with_h {
-                    sum.hess += local.hess;
-                }
+                out.bending += bending::node(rod, i, with_h, &mut local);
             }
             if terms.twisting {
-                twisting::node(rod, i, with_h, &mut local);
-                out.twisting += local.energy;
-                sum.grad += local.grad;
-                if with_h {
-                    sum.hess += local.hess;
-                }
+                out.twisting += twisting::node(rod, i, with_h, &mut local);
             }
-            add_local(node_dof(i - 1), &sum, grad, hess.as_deref_mut());
+            add_local(node_dof(i - 1), &local, grad, hess.as_deref_mut());
         }
     }
     out
@@ -125,10 +116,10 @@ fn add_local<const N: usize>(offset: usize, local: &Local<N>, grad: &mut [f64], 
     }
 }
 
-/// Writes `scale` times the position blocks of a stencil Hessian from the second
-/// derivatives along the edges e = x_i - x_{i-1}, f = x_{i+1} - x_i (`a` = d2/de2,
-/// `b` = d2/de df, `c` = d2/df2), and sets the (th_{i-1}, th_{i-1}) and (th_i, th_i)
-/// entries. Adds into `hess`.
+/// Adds `scale` times the lower position blocks of a stencil Hessian, from the
+/// second derivatives along the edges e = x_i - x_{i-1}, f = x_{i+1} - x_i
+/// (`a` = d2/de2, `b` = d2/de df, `c` = d2/df2), and `dthe2`, `dthf2` to the
+/// (th_{i-1}, th_{i-1}) and (th_i, th_i) entries. Lower triangle only.
 pub(crate) fn scatter_stencil(
     hess: &mut SMatrix<f64, 11, 11>,
     a: &Matrix3<f64>,
@@ -137,21 +128,22 @@ pub(crate) fn scatter_stencil(
     (scale, dthe2, dthf2): (f64, f64, f64),
 ) {
     let bt = b.transpose();
-    let blocks = [
-        (0, 0, *a),
-        (0, 4, b - a),
-        (0, 8, -b),
-        (4, 0, bt - a),
-        (4, 4, a - b - bt + c),
-        (4, 8, b - c),
-        (8, 0, -bt),
-        (8, 4, bt - c),
-        (8, 8, *c),
-    ];
+    let blocks = [(0, 0, *a), (4, 0, bt - a), (4, 4, a - b - bt + c), (8, 0, -bt), (8, 4, bt - c), (8, 8, *c)];
     for (r, col, m) in blocks {
         let mut v = hess.fixed_view_mut::<3, 3>(r, col);
         v += m * scale;
     }
     hess[(3, 3)] += dthe2;
     hess[(7, 7)] += dthf2;
+}
+
+/// Adds `w v v^T` to the lower triangle of `hess`.
+#[inline]
+pub(crate) fn add_outer_lower<const N: usize>(hess: &mut SMatrix<f64, N, N>, w: f64, v: &SVector<f64, N>) {
+    for c in 0..N {
+        let wc = w * v[c];
+        for r in c..N {
+            hess[(r, c)] += wc * v[r];
+        }
+    }
 }

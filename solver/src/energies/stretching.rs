@@ -5,7 +5,7 @@ use crate::rod::Rod;
 use nalgebra::Matrix3;
 
 /// Energy, gradient and Hessian of edge `i` over its local DOFs
-/// [x_i, th_i, x_{i+1}] (7 entries, the twist entry is zero).
+/// [x_i, th_i, x_{i+1}] (7 entries, the twist entry is zero); lower Hessian only.
 pub fn edge(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<7>) {
     let ea = rod.section.ea;
     let rest = rod.rest_len[i];
@@ -24,7 +24,6 @@ pub fn edge(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<7>) {
         out.hess.fill(0.0);
         out.hess.fixed_view_mut::<3, 3>(0, 0).copy_from(&k);
         out.hess.fixed_view_mut::<3, 3>(4, 4).copy_from(&k);
-        out.hess.fixed_view_mut::<3, 3>(0, 4).copy_from(&-k);
         out.hess.fixed_view_mut::<3, 3>(4, 0).copy_from(&-k);
     }
 }

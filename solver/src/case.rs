@@ -1,0 +1,163 @@
+//! The one definition of a knot case's parameters, with the paper's defaults,
+//! shared by the CLI, the API, the queue and the solver. SI units.
+use serde::{Deserialize, Serialize};
+
+/// Parameters of one overhand-knot tightening case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CaseParams {
+    /// Number of passes (unknotting number) n, 1..=8.
+    pub n: u32,
+    /// Rod radius h (m); paper: 1.6 mm.
+    pub h: f64,
+    /// Coulomb friction coefficient mu; paper: 0.1.
+    pub mu: f64,
+    /// Rod length L (m); paper: 1 m.
+    pub length: f64,
+    /// Node count K; paper: 301.
+    pub nodes: usize,
+    /// Young's modulus E (Pa); paper: 1.8 MPa.
+    pub youngs_modulus: f64,
+    /// Poisson's ratio nu; paper: 0.5.
+    pub poisson_ratio: f64,
+    /// Density rho (kg/m^3); the paper's code: 1000.
+    pub density: f64,
+    /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
+    pub pull_speed: f64,
+    /// Time step (s); the paper's code: 1 ms.
+    pub dt: f64,
+    /// Relaxation before pulling: the ends are held until the kinetic energy
+    /// falls below `relax_tolerance` times the elastic energy, at most this long (s).
+    pub relax_time: f64,
+    /// See `relax_time`.
+    pub relax_tolerance: f64,
+    /// Mass-proportional viscous damping rate (1/s) while pulling.
+    pub damping: f64,
+    /// Initial clamp-to-clamp distance (m); `None`: the builder's default for n.
+    pub end_to_end: Option<f64>,
+    /// Strand length of a braid pass in the initial shape (m); `None`: builder default.
+    pub braid_length: Option<f64>,
+    /// Series sampling interval in l_k bar.
+    pub sample_interval: f64,
+    /// Stop when l_k bar falls below this.
+    pub min_l_k_bar: f64,
+    /// Stop this far in l_k bar past a detected inversion (`None`: never early).
+    pub stop_after_inversion: Option<f64>,
+    /// Stop when F bar exceeds this (the knot is fully tight); `None`: never.
+    pub max_force_bar: Option<f64>,
+}
+
+impl Default for CaseParams {
+    fn default() -> Self {
+        Self {
+            n: 3,
+            h: 1.6e-3,
+            mu: 0.1,
+            length: 1.0,
+            nodes: 301,
+            youngs_modulus: 1.8e6,
+            poisson_ratio: 0.5,
+            density: 1000.0,
+            pull_speed: 3e-3,
+            dt: 1e-3,
+            relax_time: 2.0,
+            relax_tolerance: 1e-4,
+            damping: 0.0,
+            end_to_end: None,
+            braid_length: None,
+            sample_interval: 0.5,
+            min_l_k_bar: 60.0,
+            stop_after_inversion: Some(10.0),
+            max_force_bar: None,
+        }
+    }
+}
+
+/// A parameter outside its documented range.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct ParamError {
+    pub field: String,
+    pub reason: String,
+}
+
+impl CaseParams {
+    /// Checks every documented range; returns all violations.
+    pub fn validate(&self) -> Result<(), Vec<ParamError>> {
+        let mut errors = Vec::new();
+        let mut check = |ok: bool, field: &str, reason: String| {
+            if !ok {
+                errors.push(ParamError {
+                    field: field.to_string(),
+                    reason,
+                });
+            }
+        };
+        let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
+        check((1..=8).contains(&self.n), "n", format!("must be an integer in 1..=8, got {}", self.n));
+        check(finite_in(self.length, 0.05, 100.0), "length", format!("must be in [0.05, 100] m, got {}", self.length));
+        check(
+            self.h.is_finite() && self.h > 0.0 && self.h < self.length / 50.0,
+            "h",
+            format!("must be positive and below L/50 = {} m, got {}", self.length / 50.0, self.h),
+        );
+        check(finite_in(self.mu, 0.0, 2.0), "mu", format!("must be in [0, 2], got {}", self.mu));
+        check((51..=4001).contains(&self.nodes), "nodes", format!("must be in 51..=4001, got {}", self.nodes));
+        check(finite_in(self.youngs_modulus, 1e3, 1e12), "youngs_modulus", format!("must be in [1e3, 1e12] Pa, got {}", self.youngs_modulus));
+        check(finite_in(self.poisson_ratio, 0.0, 0.5), "poisson_ratio", format!("must be in [0, 0.5], got {}", self.poisson_ratio));
+        check(finite_in(self.density, 1.0, 1e5), "density", format!("must be in [1, 1e5] kg/m^3, got {}", self.density));
+        check(finite_in(self.pull_speed, 1e-5, 1.0), "pull_speed", format!("must be in [1e-5, 1] m/s, got {}", self.pull_speed));
+        check(finite_in(self.dt, 1e-6, 1e-2), "dt", format!("must be in [1e-6, 1e-2] s, got {}", self.dt));
+        check(finite_in(self.relax_time, 0.0, 100.0), "relax_time", format!("must be in [0, 100] s, got {}", self.relax_time));
+        check(finite_in(self.relax_tolerance, 0.0, 1.0), "relax_tolerance", format!("must be in [0, 1], got {}", self.relax_tolerance));
+        check(finite_in(self.damping, 0.0, 1e4), "damping", format!("must be in [0, 1e4] 1/s, got {}", self.damping));
+        check(finite_in(self.sample_interval, 1e-3, 100.0), "sample_interval", format!("must be in [1e-3, 100], got {}", self.sample_interval));
+        check(finite_in(self.min_l_k_bar, 0.0, 1e6), "min_l_k_bar", format!("must be in [0, 1e6], got {}", self.min_l_k_bar));
+        if let Some(v) = self.end_to_end {
+            check(finite_in(v, 0.0, self.length) && v > 0.0, "end_to_end", format!("must be in (0, L] m, got {v}"));
+        }
+        if let Some(v) = self.braid_length {
+            check(finite_in(v, 0.0, self.length / 2.0) && v > 0.0, "braid_length", format!("must be in (0, L/2] m, got {v}"));
+        }
+        if let Some(v) = self.stop_after_inversion {
+            check(finite_in(v, 0.0, 1e6), "stop_after_inversion", format!("must be in [0, 1e6], got {v}"));
+        }
+        if let Some(v) = self.max_force_bar {
+            check(v.is_finite() && v > 0.0, "max_force_bar", format!("must be positive, got {v}"));
+        }
+        if errors.is_empty() { Ok(()) } else { Err(errors) }
+    }
+
+    /// Bending stiffness EI = (pi/4) E h^4 (eq. 11).
+    pub fn bending_stiffness(&self) -> f64 {
+        std::f64::consts::PI / 4.0 * self.youngs_modulus * self.h.powi(4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_bad_fields_are_named() {
+        assert!(CaseParams::default().validate().is_ok());
+        let bad = CaseParams {
+            n: 0,
+            h: 0.05,
+            mu: -1.0,
+            ..CaseParams::default()
+        };
+        let errors = bad.validate().unwrap_err();
+        let fields: Vec<&str> = errors.iter().map(|e| e.field.as_str()).collect();
+        assert_eq!(fields, ["n", "h", "mu"]);
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected() {
+        let r: Result<CaseParams, _> = serde_json::from_str(r#"{"n": 3, "radius": 0.001}"#);
+        assert!(r.is_err());
+        let p: CaseParams = serde_json::from_str(r#"{"n": 4}"#).unwrap();
+        assert_eq!(p.n, 4);
+        assert_eq!(p.h, 1.6e-3);
+    }
+}

@@ -1,0 +1,282 @@
+//! Measurements of paper eq. (11) and Sec. 4.1, and detection of the inversion.
+//!
+//! Definitions used here (the paper's Fig. 4 in words):
+//! - l_c: distance between the two outermost (clamped) nodes; l_k = L - l_c,
+//!   l_k bar = l_k / h.
+//! - F: traction force, the clamps' reactions along the pulling axis (mean of
+//!   the two ends); F bar = F h^2 / EI with EI = (pi/4) E h^4.
+//! - Braid ends: the braid is where the rod's first half touches its second
+//!   half. Of the self-contacts (i, j) of segments i < K/2 <= j, the first
+//!   strand's braid is the longest run of consecutive i (gaps of at most
+//!   `RUN_GAP` segments) and the second strand's the longest run of j. The loop
+//!   runs from node P (just after the first run) to node Q (start of the
+//!   second run). A loop that falls onto the braid after the inversion touches
+//!   it outside these runs and does not move the braid ends.
+//! - W = |x_Q - x_P|, the distance between the two ends of the braid region.
+//! - H: along the loop's symmetric division (the plane bisecting the chord PQ),
+//!   the distance from the chord to the farthest point where the loop crosses
+//!   that plane; H bar = H / W.
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// One sample of the tightening series.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Sample {
+    /// Simulated time since the pull started (s).
+    pub time: f64,
+    pub l_k_bar: f64,
+    pub l_c_over_l: f64,
+    /// Traction force F (N) and F bar.
+    pub force: f64,
+    pub f_bar: f64,
+    /// Loop width W and height H (m), H bar = H / W (0 when no braid is found).
+    pub width: f64,
+    pub height: f64,
+    pub h_bar: f64,
+    /// Kinetic energy (J).
+    pub kinetic_energy: f64,
+    /// Contacts within the detection margin and those carrying load.
+    pub contacts: usize,
+    pub active_contacts: usize,
+    /// Largest penetration / h.
+    pub max_penetration: f64,
+    /// Newton iterations of the step that produced the sample.
+    pub newton_iterations: u32,
+}
+
+/// The loop between the braid ends.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LoopGeometry {
+    /// Node where the loop leaves the braid (P) and re-enters it (Q).
+    pub start: usize,
+    pub end: usize,
+    pub width: f64,
+    pub height: f64,
+}
+
+/// Largest gap (in segments) inside one run of braid contacts.
+pub const RUN_GAP: usize = 3;
+
+/// Loop ends (P, Q) from the self-contact segment pairs (i, j), as defined in
+/// the module documentation; `None` when no pair crosses the middle node `mid`.
+pub fn braid_ends(pairs: impl IntoIterator<Item = (usize, usize)>, mid: usize) -> Option<(usize, usize)> {
+    let mut first = Vec::new();
+    let mut second = Vec::new();
+    for (i, j) in pairs {
+        let (i, j) = if i < j { (i, j) } else { (j, i) };
+        if i < mid && j >= mid {
+            first.push(i);
+            second.push(j);
+        }
+    }
+    let (_, a_end) = longest_run(&mut first)?;
+    let (b_start, _) = longest_run(&mut second)?;
+    (a_end + 1 < b_start).then_some((a_end + 1, b_start))
+}
+
+/// The longest run of values with gaps of at most `RUN_GAP` (first and last value).
+fn longest_run(values: &mut [usize]) -> Option<(usize, usize)> {
+    values.sort_unstable();
+    let mut best: Option<(usize, usize)> = None;
+    let mut start = *values.first()?;
+    let mut prev = start;
+    for &v in values.iter().skip(1).chain(std::iter::once(&usize::MAX)) {
+        if v == usize::MAX || v > prev + RUN_GAP {
+            if best.is_none_or(|(a, b)| prev - start > b - a) {
+                best = Some((start, prev));
+            }
+            start = v;
+        }
+        prev = v;
+    }
+    best
+}
+
+/// W and H of the loop running along `points[start..=end]`.
+pub fn loop_geometry(points: &[Vector3<f64>], start: usize, end: usize) -> LoopGeometry {
+    let p = points[start];
+    let q = points[end];
+    let width = (q - p).norm();
+    let mut height: f64 = 0.0;
+    if width > 0.0 {
+        let c = (q - p) / width;
+        let m = (p + q) / 2.0;
+        let along = |x: &Vector3<f64>| (x - m).dot(&c);
+        for k in start..end {
+            let (a, b) = (points[k], points[k + 1]);
+            let (sa, sb) = (along(&a), along(&b));
+            if (sa <= 0.0 && sb > 0.0) || (sa >= 0.0 && sb < 0.0) {
+                let t = sa / (sa - sb);
+                let x = a + (b - a) * t;
+                let d = x - m;
+                height = height.max((d - c * d.dot(&c)).norm());
+            }
+        }
+    }
+    LoopGeometry {
+        start,
+        end,
+        width,
+        height,
+    }
+}
+
+/// The snap-through point (paper Fig. 5).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Inversion {
+    /// l_k bar and l_c / L of the last sample before H bar drops.
+    pub l_k_bar: f64,
+    pub l_c_over_l: f64,
+    /// F bar just before the drop and its minimum just after.
+    #[serde(rename = "F_bar_before")]
+    pub f_bar_before: f64,
+    #[serde(rename = "F_bar_after")]
+    pub f_bar_after: f64,
+    /// H bar before and after the drop.
+    pub h_bar_before: f64,
+    pub h_bar_after: f64,
+    /// Peak kinetic energy around the drop over the median before it.
+    pub kinetic_energy_ratio: f64,
+    /// Index of the sample before the drop.
+    pub sample: usize,
+}
+
+/// Detection thresholds.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InversionCriteria {
+    /// H bar must fall to at most this fraction of its value before the drop...
+    pub drop_fraction: f64,
+    /// ...within this many l_k bar.
+    pub window: f64,
+    /// Confirmation: the kinetic energy around the drop exceeds its median over
+    /// the preceding samples by at least this factor.
+    pub kinetic_energy_spike: f64,
+}
+
+impl Default for InversionCriteria {
+    fn default() -> Self {
+        Self {
+            drop_fraction: 0.4,
+            window: 4.0,
+            kinetic_energy_spike: 5.0,
+        }
+    }
+}
+
+/// The first sudden drop of H bar that the kinetic energy confirms, and the
+/// force drop around it (paper Fig. 5). Samples are ordered by decreasing l_k bar;
+/// sample j drops when its H bar is at most `drop_fraction` times the largest H
+/// bar of the samples within `window` before it.
+pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
+    for j in 1..series.len() {
+        let drop = &series[j];
+        if drop.width <= 0.0 {
+            continue;
+        }
+        let reference = series[..j]
+            .iter()
+            .rev()
+            .take_while(|s| s.l_k_bar - drop.l_k_bar <= criteria.window)
+            .map(|s| s.h_bar)
+            .fold(0.0, f64::max);
+        if reference <= 0.0 || drop.h_bar > criteria.drop_fraction * reference {
+            continue;
+        }
+        let before = &series[j - 1];
+        let lo = j.saturating_sub(20);
+        let mut ke: Vec<f64> = series[lo..j].iter().map(|s| s.kinetic_energy).collect();
+        ke.sort_by(f64::total_cmp);
+        let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
+        let hi = (j + 4).min(series.len());
+        let peak = series[j..hi].iter().map(|s| s.kinetic_energy).fold(0.0, f64::max);
+        let ratio = peak / median;
+        if ratio < criteria.kinetic_energy_spike {
+            continue;
+        }
+        let f_after = series[j..hi].iter().map(|s| s.f_bar).fold(f64::INFINITY, f64::min);
+        return Some(Inversion {
+            l_k_bar: before.l_k_bar,
+            l_c_over_l: before.l_c_over_l,
+            f_bar_before: before.f_bar,
+            f_bar_after: f_after,
+            h_bar_before: before.h_bar,
+            h_bar_after: drop.h_bar,
+            kinetic_energy_ratio: ratio,
+            sample: j - 1,
+        });
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// A circular loop of radius r through P = (-w/2, 0, 0) and Q = (w/2, 0, 0)
+    /// bulging to +y: H = sqrt(r^2 - w^2/4) + r.
+    #[test]
+    fn circular_loop_has_known_width_and_height() {
+        let (r, w): (f64, f64) = (0.05, 0.06);
+        let c = Vector3::new(0.0, (r * r - w * w / 4.0).sqrt(), 0.0);
+        let a0 = (-c.y).atan2(-w / 2.0);
+        let a1 = (-c.y).atan2(w / 2.0) - 2.0 * PI;
+        let pts: Vec<Vector3<f64>> = (0..=400)
+            .map(|k| {
+                let a = a0 + (a1 - a0) * k as f64 / 400.0;
+                c + Vector3::new(r * a.cos(), r * a.sin(), 0.0)
+            })
+            .collect();
+        let g = loop_geometry(&pts, 0, 400);
+        assert!((g.width - w).abs() < 1e-12);
+        let expected = c.y + r;
+        assert!((g.height - expected).abs() < 1e-4 * expected, "{} vs {expected}", g.height);
+    }
+
+    #[test]
+    fn flat_loop_has_zero_height() {
+        let pts: Vec<Vector3<f64>> = (0..=10).map(|k| Vector3::new(k as f64, 0.0, 0.0)).collect();
+        assert_eq!(loop_geometry(&pts, 0, 10).height, 0.0);
+    }
+
+    #[test]
+    fn braid_ends_from_contacts() {
+        // Strand A (segments 40..60) contacts strand B (141..161), mid = 100;
+        // an isolated loop-on-braid contact (80, 150) must not move the ends.
+        let pairs = (40..60).map(|i| (i, 200 - i)).chain([(10, 20), (80, 150)]);
+        assert_eq!(braid_ends(pairs, 100), Some((60, 141)));
+        assert_eq!(braid_ends([(10, 20)], 100), None);
+    }
+
+    fn sample(l: f64, h_bar: f64, ke: f64, f: f64) -> Sample {
+        Sample {
+            l_k_bar: l,
+            h_bar,
+            kinetic_energy: ke,
+            f_bar: f,
+            width: 1.0,
+            ..Sample::default()
+        }
+    }
+
+    #[test]
+    fn sudden_drop_with_energy_spike_is_an_inversion() {
+        let mut s: Vec<Sample> = (0..40).map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0 + 0.01 * k as f64)).collect();
+        s.push(sample(160.0, 0.05, 1e-6, 0.6));
+        s.push(sample(159.0, 0.04, 1e-8, 0.9));
+        let inv = detect_inversion(&s, &InversionCriteria::default()).expect("detected");
+        assert_eq!(inv.l_k_bar, 161.0);
+        assert_eq!(inv.sample, 39);
+        assert_eq!(inv.h_bar_after, 0.05);
+        assert!(inv.f_bar_after < inv.f_bar_before);
+    }
+
+    #[test]
+    fn slow_decline_or_no_energy_spike_is_not() {
+        let slow: Vec<Sample> = (0..100).map(|k| sample(200.0 - k as f64, 0.8 * (1.0 - k as f64 / 100.0), 1e-9, 1.0)).collect();
+        assert!(detect_inversion(&slow, &InversionCriteria::default()).is_none());
+        let mut quiet: Vec<Sample> = (0..40).map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0)).collect();
+        quiet.push(sample(160.0, 0.05, 1e-9, 1.0));
+        assert!(detect_inversion(&quiet, &InversionCriteria::default()).is_none());
+    }
+}

@@ -1,0 +1,316 @@
+//! The tightening protocol of paper Sec. 4: build the knot, clamp both ends
+//! (equal material frames, no relative rotation), relax with the ends held,
+//! then pull the clamps apart along the line joining them at a steady speed,
+//! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
+use crate::case::CaseParams;
+use crate::external::Environment;
+use crate::knot::{self, KnotSpec};
+use crate::material::Material;
+use crate::measurements::{self, Inversion, InversionCriteria, Sample};
+use crate::pipeline::{ContactOptions, World};
+use crate::rod::{End, Rod};
+use crate::stepper::NewtonOptions;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+/// How a case ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Ran to its stop condition; the result is valid.
+    Completed,
+    /// Parameters out of range or no knot can be built with them.
+    Invalid,
+    /// A time step failed even after time-step reductions.
+    Diverged,
+    /// Penetration beyond half the radius: contact was lost.
+    Penetrated,
+    /// The knot type changed (strands passed through each other).
+    TopologyChanged,
+    /// Stopped by the caller.
+    Cancelled,
+}
+
+/// A centreline snapshot.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    pub label: String,
+    pub l_k_bar: f64,
+    pub points: Vec<[f64; 3]>,
+}
+
+/// Counts and timings of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    pub steps: u64,
+    pub newton_iterations: u64,
+    pub relax_steps: u64,
+    /// Wall time (s) of the whole case and per stage.
+    pub wall_time: f64,
+    pub detection_time: f64,
+    pub contact_time: f64,
+    pub dynamics_time: f64,
+}
+
+/// The result of one case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseReport {
+    pub status: Status,
+    /// Why the case ended that way (empty when completed).
+    pub reason: String,
+    pub params: CaseParams,
+    /// Knot determinant of the initial shape and at the end (2n + 1 expected).
+    pub determinant_initial: Option<u64>,
+    pub determinant_final: Option<u64>,
+    /// The inversion point, `None` when H bar never snapped.
+    pub inversion: Option<Inversion>,
+    pub series: Vec<Sample>,
+    pub frames: Vec<Frame>,
+    pub stats: Stats,
+}
+
+/// Progress handed to the caller after every sample.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Progress {
+    /// Fraction of the pull done, from the start to the stop condition (0..1).
+    pub fraction: f64,
+    pub l_k_bar: f64,
+    pub h_bar: f64,
+    pub steps: u64,
+}
+
+/// Penetration (fraction of h) that ends a case as `Penetrated`.
+const MAX_PENETRATION: f64 = 0.5;
+/// Samples between topology checks.
+const TOPOLOGY_EVERY: usize = 50;
+/// Frames kept around the newest sample for the inversion snapshots.
+const FRAME_HISTORY: usize = 40;
+/// Damping rate (1/s) while relaxing.
+const RELAX_DAMPING: f64 = 20.0;
+
+/// Runs one case. `observer` sees progress after every sample and returns
+/// `false` to cancel.
+pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
+    let started = std::time::Instant::now();
+    let mut report = CaseReport {
+        status: Status::Completed,
+        reason: String::new(),
+        params: params.clone(),
+        determinant_initial: None,
+        determinant_final: None,
+        inversion: None,
+        series: Vec::new(),
+        frames: Vec::new(),
+        stats: Stats::default(),
+    };
+    if let Err(errors) = params.validate() {
+        report.status = Status::Invalid;
+        report.reason = errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("; ");
+        return report;
+    }
+    let spec = KnotSpec {
+        n: params.n,
+        length: params.length,
+        nodes: params.nodes,
+        radius: params.h,
+        end_to_end: params.end_to_end,
+        braid_length: params.braid_length,
+        loop_length: None,
+    };
+    let shape = match knot::build(&spec) {
+        Ok(s) => s,
+        Err(e) => {
+            report.status = Status::Invalid;
+            report.reason = format!("knot builder: {e}");
+            return report;
+        }
+    };
+    let expected = knot::expected_determinant(params.n);
+    report.determinant_initial = knot::knot_determinant(&shape.points).ok();
+    if report.determinant_initial != Some(expected) {
+        report.status = Status::Invalid;
+        report.reason = format!(
+            "the built knot has determinant {:?}, expected {expected}",
+            report.determinant_initial
+        );
+        return report;
+    }
+    let material = Material {
+        youngs_modulus: params.youngs_modulus,
+        poisson_ratio: params.poisson_ratio,
+        density: params.density,
+    };
+    let mut rod = match Rod::new(&shape.points, params.h, material) {
+        Ok(r) => r,
+        Err(e) => {
+            report.status = Status::Invalid;
+            report.reason = format!("rod: {e}");
+            return report;
+        }
+    };
+    rod.clamp(End::Start);
+    rod.clamp(End::Finish);
+    let ei = params.bending_stiffness();
+    let force_unit = ei / (params.h * params.h);
+    let newton = NewtonOptions {
+        force_scale: Some(force_unit),
+        ..NewtonOptions::default()
+    };
+    let contact = ContactOptions {
+        friction: params.mu,
+        ..ContactOptions::default()
+    };
+    let env = Environment {
+        gravity: Vector3::zeros(),
+        damping: RELAX_DAMPING,
+    };
+    let mut world = World::new(vec![rod], env, contact, newton);
+    let frame = |w: &World, label: &str, l_k_bar: f64| Frame {
+        label: label.to_string(),
+        l_k_bar,
+        points: w.rods[0].positions().iter().map(|p| [p.x, p.y, p.z]).collect(),
+    };
+    let l_k_bar_of = |w: &World| {
+        let r = &w.rods[0];
+        (params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / params.h
+    };
+
+    // Relaxation with the ends held.
+    let relax_steps = (params.relax_time / params.dt).round() as u64;
+    for _ in 0..relax_steps {
+        if let Err(e) = world.step(params.dt) {
+            return finish(report, world, Status::Diverged, format!("while relaxing: {e}"), started);
+        }
+        report.stats.relax_steps += 1;
+        let ke = world.rods[0].kinetic_energy();
+        let mut g = vec![0.0; world.rods[0].ndof()];
+        let elastic = crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut g, None).total();
+        if ke <= params.relax_tolerance * elastic {
+            break;
+        }
+    }
+    report.frames.push(frame(&world, "relaxed", l_k_bar_of(&world)));
+
+    // Pull both clamps apart along the line joining them.
+    let axis = {
+        let r = &world.rods[0];
+        (r.node(r.nodes() - 1) - r.node(0)).normalize()
+    };
+    world.env.damping = params.damping;
+    world.rods[0].move_clamp(End::Start, -axis * params.pull_speed);
+    world.rods[0].move_clamp(End::Finish, axis * params.pull_speed);
+    let start_l_k_bar = l_k_bar_of(&world);
+    let mut next_sample = start_l_k_bar;
+    let mut history: VecDeque<Frame> = VecDeque::with_capacity(FRAME_HISTORY);
+    let criteria = InversionCriteria::default();
+    let mid = world.rods[0].nodes() / 2;
+    let mut time = 0.0;
+    loop {
+        let step = match world.step(params.dt) {
+            Ok(s) => s,
+            Err(e) => return finish(report, world, Status::Diverged, e.to_string(), started),
+        };
+        time += params.dt;
+        report.stats.steps += 1;
+        report.stats.newton_iterations += u64::from(step.newton_iterations);
+        if step.max_penetration > MAX_PENETRATION * params.h {
+            let reason = format!(
+                "penetration {:.3} h exceeds {MAX_PENETRATION} h at l_k bar {:.2}",
+                step.max_penetration / params.h,
+                l_k_bar_of(&world)
+            );
+            return finish(report, world, Status::Penetrated, reason, started);
+        }
+        let l_k_bar = l_k_bar_of(&world);
+        if l_k_bar > next_sample {
+            continue;
+        }
+        next_sample = l_k_bar - params.sample_interval;
+        let rod = &world.rods[0];
+        let stepper = world.stepper(0);
+        let f_start = -stepper.clamp_reaction(rod, End::Start).0.dot(&axis);
+        let f_finish = stepper.clamp_reaction(rod, End::Finish).0.dot(&axis);
+        let force = 0.5 * (f_start + f_finish);
+        let points = rod.positions();
+        let pairs = world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
+        let geometry = measurements::braid_ends(pairs, mid).map(|(p, q)| measurements::loop_geometry(&points, p, q));
+        let (width, height) = geometry.map_or((0.0, 0.0), |g| (g.width, g.height));
+        report.series.push(Sample {
+            time,
+            l_k_bar,
+            l_c_over_l: 1.0 - l_k_bar * params.h / params.length,
+            force,
+            f_bar: force / force_unit,
+            width,
+            height,
+            h_bar: if width > 0.0 { height / width } else { 0.0 },
+            kinetic_energy: rod.kinetic_energy(),
+            contacts: step.contacts,
+            active_contacts: step.active_contacts,
+            max_penetration: step.max_penetration / params.h,
+            newton_iterations: step.newton_iterations,
+        });
+        if history.len() == FRAME_HISTORY {
+            history.pop_front();
+        }
+        history.push_back(frame(&world, "sample", l_k_bar));
+        if report.inversion.is_none() {
+            report.inversion = measurements::detect_inversion(&report.series, &criteria);
+            if let Some(inv) = &report.inversion {
+                let at = |label: &str, l: f64| history.iter().min_by(|a, b| (a.l_k_bar - l).abs().total_cmp(&(b.l_k_bar - l).abs())).map(|f| Frame { label: label.to_string(), ..f.clone() });
+                report.frames.extend(at("before_inversion", inv.l_k_bar + 2.0));
+                report.frames.extend(at("at_inversion", inv.l_k_bar));
+            }
+        }
+        if report.series.len() % TOPOLOGY_EVERY == 0 {
+            let det = knot::knot_determinant(&points).ok();
+            if det != Some(expected) {
+                report.determinant_final = det;
+                let reason = format!("knot determinant {det:?} at l_k bar {l_k_bar:.2}, expected {expected}");
+                return finish(report, world, Status::TopologyChanged, reason, started);
+            }
+        }
+        let stop_l = match (report.inversion, params.stop_after_inversion) {
+            (Some(inv), Some(margin)) => (inv.l_k_bar - margin).max(params.min_l_k_bar),
+            _ => params.min_l_k_bar,
+        };
+        let sample = report.series.last().copied().unwrap_or_default();
+        let fraction = ((start_l_k_bar - l_k_bar) / (start_l_k_bar - stop_l)).clamp(0.0, 1.0);
+        let keep_going = observer(&Progress {
+            fraction,
+            l_k_bar,
+            h_bar: sample.h_bar,
+            steps: report.stats.steps,
+        });
+        if !keep_going {
+            return finish(report, world, Status::Cancelled, "cancelled".to_string(), started);
+        }
+        let tight = params.max_force_bar.is_some_and(|m| sample.f_bar > m);
+        if l_k_bar <= stop_l || tight {
+            break;
+        }
+    }
+    let det = knot::knot_determinant(&world.rods[0].positions()).ok();
+    report.determinant_final = det;
+    if det != Some(expected) {
+        let reason = format!("knot determinant {det:?} at the end, expected {expected}");
+        return finish(report, world, Status::TopologyChanged, reason, started);
+    }
+    let l_end = l_k_bar_of(&world);
+    report.frames.push(frame(&world, "final", l_end));
+    finish(report, world, Status::Completed, String::new(), started)
+}
+
+fn finish(mut report: CaseReport, world: World, status: Status, reason: String, started: std::time::Instant) -> CaseReport {
+    report.status = status;
+    report.reason = reason;
+    if status != Status::Completed {
+        report.inversion = None;
+    }
+    report.stats.wall_time = started.elapsed().as_secs_f64();
+    report.stats.detection_time = world.counters.detection.as_secs_f64();
+    report.stats.contact_time = world.counters.contact_solve.as_secs_f64();
+    report.stats.dynamics_time = world.counters.dynamics.as_secs_f64();
+    report
+}

@@ -1,0 +1,185 @@
+//! `knotsweep sweep`: runs a sweep on this machine through the same queue as
+//! the service (a local SQLite file), with a progress bar, and writes the
+//! phase-diagram JSON. The submission carries an idempotency key derived from
+//! the specification, so running the same command again after an
+//! interruption resumes the sweep (finished cases are kept) instead of
+//! starting over.
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use knotsweep_server::views::SweepStatus;
+use knotsweep_server::{Core, DEFAULT_DATABASE_URL, Limits};
+use knotsweep_worker::store::SweepAction;
+use knotsweep_worker::{PoolConfig, Store, WorkerPool};
+use serde_json::Value;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// A preset: fig7, fig9 or fig11 (see `GET /api/presets`).
+    #[arg(long, conflicts_with = "spec", required_unless_present = "spec")]
+    preset: Option<String>,
+    /// A sweep specification: JSON as for `POST /api/sweeps`.
+    #[arg(long)]
+    spec: Option<PathBuf>,
+    /// Sets a base parameter, e.g. `--set nodes=151` (value as JSON); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Phase-diagram JSON output [default: <preset or spec file name>.json].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Database: `sqlite://PATH` (shared with `knotsweep serve`: results are reused).
+    #[arg(long, default_value = DEFAULT_DATABASE_URL)]
+    database_url: String,
+    /// Concurrent cases [default: one per core].
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Lease length (s).
+    #[arg(long, default_value_t = 30.0)]
+    lease_seconds: f64,
+}
+
+fn build_spec(args: &Args) -> Result<Value> {
+    let mut spec = match (&args.preset, &args.spec) {
+        (Some(preset), _) => serde_json::json!({ "preset": preset }),
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?
+        }
+        (None, None) => bail!("give --preset or --spec"),
+    };
+    let Some(object) = spec.as_object_mut() else { bail!("the specification must be a JSON object") };
+    for assignment in &args.set {
+        let Some((name, value)) = assignment.split_once('=') else {
+            bail!("--set {assignment}: expected NAME=VALUE");
+        };
+        let value: Value = serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
+        let base = object.entry("base").or_insert_with(|| Value::Object(Default::default()));
+        let Some(base) = base.as_object_mut() else { bail!("base must be a JSON object") };
+        base.insert(name.trim().to_string(), value);
+    }
+    Ok(spec)
+}
+
+fn default_out(args: &Args) -> PathBuf {
+    match (&args.preset, &args.spec) {
+        (Some(p), _) => PathBuf::from(format!("{p}.json")),
+        (None, Some(path)) => {
+            let stem = path.file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+            PathBuf::from(format!("{stem}-phase-diagram.json"))
+        }
+        (None, None) => PathBuf::from("sweep.json"),
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let spec_value = build_spec(&args)?;
+    let body = serde_json::to_vec(&spec_value)?;
+    let (spec, raw) = Core::parse_spec(&body).map_err(|e| anyhow::anyhow!(describe(e)))?;
+    let out = args.out.clone().unwrap_or_else(|| default_out(&args));
+    let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+    runtime.block_on(async move {
+        let store = crate::worker::open_store(&args.database_url).await?;
+        let dyn_store: Arc<dyn Store> = store.clone();
+        let core = Core::new(dyn_store.clone(), Limits::default(), None);
+        // Same specification, same key: a rerun finds the first sweep.
+        let key = format!(
+            "cli-{}",
+            &blake3::hash(knotsweep_worker::canonical_value(&raw).as_bytes()).to_hex()[..32]
+        );
+        let mut submitted = core
+            .submit(spec.clone(), &raw, Some(&key))
+            .await
+            .map_err(|e| anyhow::anyhow!(describe(e)))?;
+        let mut id = submitted.sweep.summary.id;
+        if submitted.replayed {
+            match submitted.sweep.summary.state.as_str() {
+                "cancelled" => {
+                    eprintln!("sweep {id} of this specification was cancelled: starting a new one (results are reused)");
+                    submitted = core.submit(spec, &raw, None).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+                    id = submitted.sweep.summary.id;
+                }
+                "paused" => {
+                    core.control(id, SweepAction::Resume).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+                }
+                _ => {}
+            }
+            let done = submitted.sweep.cases.iter().filter(|c| c.progress >= 1.0).count();
+            eprintln!("resuming sweep {id}: {done} of {} cases finished", submitted.sweep.cases.len());
+        } else {
+            eprintln!(
+                "sweep {id}: {} cases ({} reused from earlier results), database {}",
+                submitted.sweep.cases.len(),
+                submitted.sweep.cached,
+                args.database_url
+            );
+        }
+        let total = submitted.sweep.cases.len() as u64;
+        let mut config = PoolConfig::new(args.workers.unwrap_or(0))
+            .with_lease(Duration::from_secs_f64(args.lease_seconds.max(0.1)));
+        config.poll = Duration::from_millis(100);
+        let pool = WorkerPool::start(dyn_store.clone(), config);
+        let bar = ProgressBar::new(total * 100).with_style(
+            ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} {msg}").expect("valid template"),
+        );
+        let signal = crate::worker::shutdown_signal();
+        tokio::pin!(signal);
+        let finished = loop {
+            let detail = core.sweep(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+            bar.set_position((detail.progress * total as f64 * 100.0) as u64);
+            let finished = detail.cases.iter().filter(|c| c.progress >= 1.0 || c.status == "failed").count();
+            let running = detail.summary.counts.get("running").copied().unwrap_or(0);
+            let eta = detail.eta_seconds.map_or("?".to_string(), |s| format!("{s:.0} s"));
+            bar.set_message(format!("{finished}/{total} cases, {running} running, eta {eta}"));
+            if matches!(detail.summary.status, SweepStatus::Done | SweepStatus::Cancelled) {
+                break true;
+            }
+            tokio::select! {
+                _ = tokio::time::sleep(Duration::from_millis(300)) => {}
+                _ = &mut signal => break false,
+            }
+        };
+        bar.finish_and_clear();
+        pool.shutdown().await;
+        if !finished {
+            store.close().await;
+            bail!("interrupted: run the same command again to resume sweep {id}");
+        }
+        let diagram = core.phase_diagram(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+        std::fs::write(&out, serde_json::to_string_pretty(&diagram)?)
+            .with_context(|| format!("writing {}", out.display()))?;
+        for p in &diagram.points {
+            let values: Vec<String> = p.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            match &p.inversion {
+                Some(inv) => println!(
+                    "{:<24} {:<18} inversion at l_k bar {:.2} (l_c/L {:.4})",
+                    values.join(", "),
+                    p.status,
+                    inv.l_k_bar,
+                    inv.l_c_over_l
+                ),
+                None => println!(
+                    "{:<24} {:<18} no inversion: {}",
+                    values.join(", "),
+                    p.status,
+                    p.reason.as_deref().unwrap_or("")
+                ),
+            }
+        }
+        println!("phase diagram of sweep {id} written to {}", out.display());
+        store.close().await;
+        Ok(())
+    })
+}
+
+fn describe(e: knotsweep_server::error::CoreError) -> String {
+    use knotsweep_server::error::CoreError;
+    match e {
+        CoreError::Invalid(fields) => {
+            let list: Vec<String> = fields.iter().map(|f| format!("{}: {}", f.field, f.reason)).collect();
+            format!("invalid sweep: {}", list.join("; "))
+        }
+        other => other.to_string(),
+    }
+}

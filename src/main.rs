@@ -1,8 +1,10 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
 mod plot;
+mod reproduce;
 mod run;
 mod serve;
+mod simplified;
 mod sweep;
 mod validate;
 mod worker;
@@ -12,7 +14,11 @@ use clap::{Parser, Subcommand};
 use tracing_subscriber::EnvFilter;
 
 #[derive(Parser)]
-#[command(name = "knotsweep", version, about = "Snap-buckling of overhand knots: DER solver and tools")]
+#[command(
+    name = "knotsweep",
+    version,
+    about = "Snap-buckling of overhand knots: DER solver and tools"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -23,7 +29,11 @@ enum Command {
     /// Run the solver's validation suite and print a table of expected vs got.
     Validate(validate::Args),
     /// Run one overhand-knot tightening case (paper Sec. 4).
-    Run(run::Args),
+    Run(Box<run::Args>),
+    /// Rerun the paper's Sec. 4 checks and write docs/VALIDATION.md.
+    Reproduce(reproduce::Args),
+    /// The simplified knot model of paper Sec. 5.
+    Simplified(simplified::Args),
     /// Serve the sweep API (and run cases on this machine's cores).
     Serve(serve::Args),
     /// Add workers to the queue of a server's database.
@@ -40,7 +50,9 @@ fn main() {
     let cli = Cli::parse();
     let result: Result<()> = match cli.command {
         Command::Validate(args) => validate::run(args),
-        Command::Run(args) => run::run(args),
+        Command::Run(args) => run::run(*args),
+        Command::Reproduce(args) => reproduce::run(args),
+        Command::Simplified(args) => simplified::run(args),
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),

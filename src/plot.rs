@@ -10,13 +10,23 @@ pub struct Curve<'a> {
 
 /// A line chart of `curves` with axis labels and optional vertical markers at
 /// the given x values; returns the SVG text.
-pub fn line_chart(title: &str, x_label: &str, y_label: &str, curves: &[Curve], markers: &[f64]) -> Result<String> {
+pub fn line_chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    curves: &[Curve],
+    markers: &[f64],
+) -> Result<String> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-        let all = curves.iter().flat_map(|c| c.points.iter()).filter(|(x, y)| x.is_finite() && y.is_finite());
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        let all = curves
+            .iter()
+            .flat_map(|c| c.points.iter())
+            .filter(|(x, y)| x.is_finite() && y.is_finite());
+        let (mut x0, mut x1, mut y0, mut y1) =
+            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
         for &(x, y) in all {
             x0 = x0.min(x);
             x1 = x1.max(x);
@@ -44,7 +54,10 @@ pub fn line_chart(title: &str, x_label: &str, y_label: &str, curves: &[Curve], m
         for (k, curve) in curves.iter().enumerate() {
             let color = Palette99::pick(k).to_rgba();
             chart
-                .draw_series(LineSeries::new(curve.points.iter().copied(), color.stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    curve.points.iter().copied(),
+                    color.stroke_width(2),
+                ))
                 .map_err(|e| anyhow!("{e}"))?
                 .label(curve.label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));

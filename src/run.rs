@@ -116,7 +116,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     tracing::info!(n = params.n, h = params.h, mu = params.mu, "running case");
     let bar = ProgressBar::new(1000).with_style(
-        ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta} {msg}").expect("valid template"),
+        ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
+            .expect("valid template"),
     );
     let report = protocol::run(&params, &mut |p| {
         bar.set_position((p.fraction * 1000.0) as u64);
@@ -125,7 +126,8 @@ pub fn run(args: Args) -> Result<()> {
     });
     bar.finish_and_clear();
     summarise(&report);
-    std::fs::write(&args.out, serde_json::to_string(&report)?).with_context(|| format!("writing {}", args.out.display()))?;
+    std::fs::write(&args.out, serde_json::to_string(&report)?)
+        .with_context(|| format!("writing {}", args.out.display()))?;
     if let Some(path) = &args.csv {
         std::fs::write(path, series_csv(&report)).with_context(|| format!("writing {}", path.display()))?;
     }
@@ -145,8 +147,16 @@ fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
     let label = format!("n = {}, h = {} mm, mu = {}", p.n, p.h * 1e3, p.mu);
     let markers: Vec<f64> = report.inversion.iter().map(|i| i.l_k_bar).collect();
     for (file, y_label, pick) in [
-        ("F_bar.svg", "F bar = F h^2 / EI", (|s: &solver::measurements::Sample| s.f_bar) as fn(&_) -> f64),
-        ("H_bar.svg", "H bar = H / W", |s: &solver::measurements::Sample| s.h_bar),
+        (
+            "F_bar.svg",
+            "F bar = F h^2 / EI",
+            (|s: &solver::measurements::Sample| s.f_bar) as fn(&_) -> f64,
+        ),
+        (
+            "H_bar.svg",
+            "H bar = H / W",
+            |s: &solver::measurements::Sample| s.h_bar,
+        ),
     ] {
         let curve = crate::plot::Curve {
             label: &label,
@@ -171,7 +181,13 @@ fn summarise(report: &CaseReport) {
     let s = &report.stats;
     println!(
         "{} steps ({} relaxing), {} Newton iterations, {:.1} s wall (detection {:.1} s, contact {:.1} s, rods {:.1} s)",
-        s.steps, s.relax_steps, s.newton_iterations, s.wall_time, s.detection_time, s.contact_time, s.dynamics_time
+        s.steps,
+        s.relax_steps,
+        s.newton_iterations,
+        s.wall_time,
+        s.detection_time,
+        s.contact_time,
+        s.dynamics_time
     );
 }
 

@@ -53,13 +53,19 @@ pub fn run(args: Args) -> Result<()> {
             token: token.clone(),
             ..ServerConfig::default()
         };
-        let workers = args.workers.unwrap_or_else(knotsweep_worker::pool::default_workers);
+        let workers = args
+            .workers
+            .unwrap_or_else(knotsweep_worker::pool::default_workers);
         let server = knotsweep_server::start(config, listener).await?;
         let url = server.url();
         println!(
             "knotsweep serving on {url} (API docs {url}/api/docs; database {}; {workers} embedded workers{})",
             args.database_url,
-            if token.is_some() { "; POST requests need the bearer token" } else { "" }
+            if token.is_some() {
+                "; POST requests need the bearer token"
+            } else {
+                ""
+            }
         );
         crate::worker::shutdown_signal().await;
         tracing::info!("shutting down");

@@ -44,19 +44,26 @@ fn build_spec(args: &Args) -> Result<Value> {
     let mut spec = match (&args.preset, &args.spec) {
         (Some(preset), _) => serde_json::json!({ "preset": preset }),
         (None, Some(path)) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
             serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?
         }
         (None, None) => bail!("give --preset or --spec"),
     };
-    let Some(object) = spec.as_object_mut() else { bail!("the specification must be a JSON object") };
+    let Some(object) = spec.as_object_mut() else {
+        bail!("the specification must be a JSON object")
+    };
     for assignment in &args.set {
         let Some((name, value)) = assignment.split_once('=') else {
             bail!("--set {assignment}: expected NAME=VALUE");
         };
         let value: Value = serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
-        let base = object.entry("base").or_insert_with(|| Value::Object(Default::default()));
-        let Some(base) = base.as_object_mut() else { bail!("base must be a JSON object") };
+        let base = object
+            .entry("base")
+            .or_insert_with(|| Value::Object(Default::default()));
+        let Some(base) = base.as_object_mut() else {
+            bail!("base must be a JSON object")
+        };
         base.insert(name.trim().to_string(), value);
     }
     Ok(spec)
@@ -66,7 +73,9 @@ fn default_out(args: &Args) -> PathBuf {
     match (&args.preset, &args.spec) {
         (Some(p), _) => PathBuf::from(format!("{p}.json")),
         (None, Some(path)) => {
-            let stem = path.file_stem().map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+            let stem = path
+                .file_stem()
+                .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
             PathBuf::from(format!("{stem}-phase-diagram.json"))
         }
         (None, None) => PathBuf::from("sweep.json"),
@@ -177,7 +186,10 @@ fn describe(e: knotsweep_server::error::CoreError) -> String {
     use knotsweep_server::error::CoreError;
     match e {
         CoreError::Invalid(fields) => {
-            let list: Vec<String> = fields.iter().map(|f| format!("{}: {}", f.field, f.reason)).collect();
+            let list: Vec<String> = fields
+                .iter()
+                .map(|f| format!("{}: {}", f.field, f.reason))
+                .collect();
             format!("invalid sweep: {}", list.join("; "))
         }
         other => other.to_string(),

@@ -30,7 +30,11 @@ pub fn run(args: Args) -> Result<()> {
         bar.set_message(case.name);
         let started = std::time::Instant::now();
         let case_rows = (case.run)();
-        tracing::info!(case = case.name, seconds = started.elapsed().as_secs_f64(), "validation case done");
+        tracing::info!(
+            case = case.name,
+            seconds = started.elapsed().as_secs_f64(),
+            "validation case done"
+        );
         rows.extend(case_rows);
         bar.inc(1);
     }

@@ -72,7 +72,10 @@ pub fn run(args: Args) -> Result<()> {
         let workers = config.workers;
         let dyn_store: Arc<dyn Store> = store.clone();
         let pool = WorkerPool::start(dyn_store, config);
-        println!("knotsweep worker {name}: {workers} workers on {}", args.database_url);
+        println!(
+            "knotsweep worker {name}: {workers} workers on {}",
+            args.database_url
+        );
         shutdown_signal().await;
         tracing::info!("stopping: no new claims, releasing leases");
         pool.shutdown().await;

@@ -38,7 +38,11 @@ fn bench(c: &mut Criterion) {
     let world = relaxed_knot();
     let contacts = world.clone().step(1e-3).expect("step").contacts;
     c.bench_function(&format!("knot/time_step_n3_K301_{contacts}contacts"), |b| {
-        b.iter_batched_ref(|| world.clone(), |w| w.step(1e-3).expect("step"), BatchSize::LargeInput)
+        b.iter_batched_ref(
+            || world.clone(),
+            |w| w.step(1e-3).expect("step"),
+            BatchSize::LargeInput,
+        )
     });
 }
 

@@ -60,7 +60,10 @@ fn benches(c: &mut Criterion) {
     c.bench_function("rod/time_step_bent_relaxing/K301", |b| {
         b.iter_batched_ref(
             || (rod.clone(), Stepper::new(&rod, NewtonOptions::default())),
-            |(r, s)| s.step(r, &Environment::default(), None, dt).expect("step converges"),
+            |(r, s)| {
+                s.step(r, &Environment::default(), None, dt)
+                    .expect("step converges")
+            },
             criterion::BatchSize::LargeInput,
         )
     });

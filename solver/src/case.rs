@@ -94,36 +94,112 @@ impl CaseParams {
             }
         };
         let finite_in = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
-        check((1..=8).contains(&self.n), "n", format!("must be an integer in 1..=8, got {}", self.n));
-        check(finite_in(self.length, 0.05, 100.0), "length", format!("must be in [0.05, 100] m, got {}", self.length));
+        check(
+            (1..=8).contains(&self.n),
+            "n",
+            format!("must be an integer in 1..=8, got {}", self.n),
+        );
+        check(
+            finite_in(self.length, 0.05, 100.0),
+            "length",
+            format!("must be in [0.05, 100] m, got {}", self.length),
+        );
         check(
             self.h.is_finite() && self.h > 0.0 && self.h < self.length / 50.0,
             "h",
-            format!("must be positive and below L/50 = {} m, got {}", self.length / 50.0, self.h),
+            format!(
+                "must be positive and below L/50 = {} m, got {}",
+                self.length / 50.0,
+                self.h
+            ),
         );
-        check(finite_in(self.mu, 0.0, 2.0), "mu", format!("must be in [0, 2], got {}", self.mu));
-        check((51..=4001).contains(&self.nodes), "nodes", format!("must be in 51..=4001, got {}", self.nodes));
-        check(finite_in(self.youngs_modulus, 1e3, 1e12), "youngs_modulus", format!("must be in [1e3, 1e12] Pa, got {}", self.youngs_modulus));
-        check(finite_in(self.poisson_ratio, 0.0, 0.5), "poisson_ratio", format!("must be in [0, 0.5], got {}", self.poisson_ratio));
-        check(finite_in(self.density, 1.0, 1e5), "density", format!("must be in [1, 1e5] kg/m^3, got {}", self.density));
-        check(finite_in(self.pull_speed, 1e-5, 1.0), "pull_speed", format!("must be in [1e-5, 1] m/s, got {}", self.pull_speed));
-        check(finite_in(self.dt, 1e-6, 1e-2), "dt", format!("must be in [1e-6, 1e-2] s, got {}", self.dt));
-        check(finite_in(self.relax_time, 0.0, 100.0), "relax_time", format!("must be in [0, 100] s, got {}", self.relax_time));
-        check(finite_in(self.relax_tolerance, 0.0, 1.0), "relax_tolerance", format!("must be in [0, 1], got {}", self.relax_tolerance));
-        check(finite_in(self.damping, 0.0, 1e4), "damping", format!("must be in [0, 1e4] 1/s, got {}", self.damping));
-        check(finite_in(self.sample_interval, 1e-3, 100.0), "sample_interval", format!("must be in [1e-3, 100], got {}", self.sample_interval));
-        check(finite_in(self.min_l_k_bar, 0.0, 1e6), "min_l_k_bar", format!("must be in [0, 1e6], got {}", self.min_l_k_bar));
+        check(
+            finite_in(self.mu, 0.0, 2.0),
+            "mu",
+            format!("must be in [0, 2], got {}", self.mu),
+        );
+        check(
+            (51..=4001).contains(&self.nodes),
+            "nodes",
+            format!("must be in 51..=4001, got {}", self.nodes),
+        );
+        check(
+            finite_in(self.youngs_modulus, 1e3, 1e12),
+            "youngs_modulus",
+            format!("must be in [1e3, 1e12] Pa, got {}", self.youngs_modulus),
+        );
+        check(
+            finite_in(self.poisson_ratio, 0.0, 0.5),
+            "poisson_ratio",
+            format!("must be in [0, 0.5], got {}", self.poisson_ratio),
+        );
+        check(
+            finite_in(self.density, 1.0, 1e5),
+            "density",
+            format!("must be in [1, 1e5] kg/m^3, got {}", self.density),
+        );
+        check(
+            finite_in(self.pull_speed, 1e-5, 1.0),
+            "pull_speed",
+            format!("must be in [1e-5, 1] m/s, got {}", self.pull_speed),
+        );
+        check(
+            finite_in(self.dt, 1e-6, 1e-2),
+            "dt",
+            format!("must be in [1e-6, 1e-2] s, got {}", self.dt),
+        );
+        check(
+            finite_in(self.relax_time, 0.0, 100.0),
+            "relax_time",
+            format!("must be in [0, 100] s, got {}", self.relax_time),
+        );
+        check(
+            finite_in(self.relax_tolerance, 0.0, 1.0),
+            "relax_tolerance",
+            format!("must be in [0, 1], got {}", self.relax_tolerance),
+        );
+        check(
+            finite_in(self.damping, 0.0, 1e4),
+            "damping",
+            format!("must be in [0, 1e4] 1/s, got {}", self.damping),
+        );
+        check(
+            finite_in(self.sample_interval, 1e-3, 100.0),
+            "sample_interval",
+            format!("must be in [1e-3, 100], got {}", self.sample_interval),
+        );
+        check(
+            finite_in(self.min_l_k_bar, 0.0, 1e6),
+            "min_l_k_bar",
+            format!("must be in [0, 1e6], got {}", self.min_l_k_bar),
+        );
         if let Some(v) = self.end_to_end {
-            check(finite_in(v, 0.0, self.length) && v > 0.0, "end_to_end", format!("must be in (0, L] m, got {v}"));
+            check(
+                finite_in(v, 0.0, self.length) && v > 0.0,
+                "end_to_end",
+                format!("must be in (0, L] m, got {v}"),
+            );
         }
         if let Some(v) = self.braid_length {
-            check(finite_in(v, 0.0, self.length / 2.0) && v > 0.0, "braid_length", format!("must be in (0, L/2] m, got {v}"));
+            check(
+                finite_in(v, 0.0, self.length / 2.0) && v > 0.0,
+                "braid_length",
+                format!("must be in (0, L/2] m, got {v}"),
+            );
         }
         if let Some(v) = self.stop_after_inversion {
-            check(finite_in(v, 0.0, 1e6), "stop_after_inversion", format!("must be in [0, 1e6], got {v}"));
+            check(
+                finite_in(v, 0.0, 1e6),
+                "stop_after_inversion",
+                format!("must be in [0, 1e6], got {v}"),
+            );
         }
         if let Some(v) = self.max_force_bar {
-            check(v.is_finite() && v > 0.0, "max_force_bar", format!("must be positive, got {v}"));
+            check(
+                v.is_finite() && v > 0.0,
+                "max_force_bar",
+                format!("must be positive, got {v}"),
+            );
         }
         if errors.is_empty() { Ok(()) } else { Err(errors) }
     }

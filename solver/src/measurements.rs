@@ -5,8 +5,10 @@
 //!   l_k bar = l_k / h.
 //! - F: traction force, the clamps' reactions along the pulling axis (mean of
 //!   the two ends); F bar = F h^2 / EI with EI = (pi/4) E h^4.
-//! - Braid ends: the braid is where the rod's first half touches its second
-//!   half. Of the self-contacts (i, j) of segments i < K/2 <= j, the first
+//! - Braid ends: the braid is where the part of the rod before the loop's middle
+//!   node m touches the part after it (m starts at the middle of the builder's
+//!   loop and follows the loop). Of the self-contacts (i, j) of segments
+//!   i < m <= j, the first
 //!   strand's braid is the longest run of consecutive i (gaps of at most
 //!   `RUN_GAP` segments) and the second strand's the longest run of j. The loop
 //!   runs from node P (just after the first run) to node Q (start of the
@@ -193,7 +195,10 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
         if ratio < criteria.kinetic_energy_spike {
             continue;
         }
-        let f_after = series[j..hi].iter().map(|s| s.f_bar).fold(f64::INFINITY, f64::min);
+        let f_after = series[j..hi]
+            .iter()
+            .map(|s| s.f_bar)
+            .fold(f64::INFINITY, f64::min);
         return Some(Inversion {
             l_k_bar: before.l_k_bar,
             l_c_over_l: before.l_c_over_l,
@@ -230,7 +235,11 @@ mod tests {
         let g = loop_geometry(&pts, 0, 400);
         assert!((g.width - w).abs() < 1e-12);
         let expected = c.y + r;
-        assert!((g.height - expected).abs() < 1e-4 * expected, "{} vs {expected}", g.height);
+        assert!(
+            (g.height - expected).abs() < 1e-4 * expected,
+            "{} vs {expected}",
+            g.height
+        );
     }
 
     #[test]
@@ -261,7 +270,9 @@ mod tests {
 
     #[test]
     fn sudden_drop_with_energy_spike_is_an_inversion() {
-        let mut s: Vec<Sample> = (0..40).map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0 + 0.01 * k as f64)).collect();
+        let mut s: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0 + 0.01 * k as f64))
+            .collect();
         s.push(sample(160.0, 0.05, 1e-6, 0.6));
         s.push(sample(159.0, 0.04, 1e-8, 0.9));
         let inv = detect_inversion(&s, &InversionCriteria::default()).expect("detected");
@@ -273,9 +284,13 @@ mod tests {
 
     #[test]
     fn slow_decline_or_no_energy_spike_is_not() {
-        let slow: Vec<Sample> = (0..100).map(|k| sample(200.0 - k as f64, 0.8 * (1.0 - k as f64 / 100.0), 1e-9, 1.0)).collect();
+        let slow: Vec<Sample> = (0..100)
+            .map(|k| sample(200.0 - k as f64, 0.8 * (1.0 - k as f64 / 100.0), 1e-9, 1.0))
+            .collect();
         assert!(detect_inversion(&slow, &InversionCriteria::default()).is_none());
-        let mut quiet: Vec<Sample> = (0..40).map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0)).collect();
+        let mut quiet: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0))
+            .collect();
         quiet.push(sample(160.0, 0.05, 1e-9, 1.0));
         assert!(detect_inversion(&quiet, &InversionCriteria::default()).is_none());
     }

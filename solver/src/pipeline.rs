@@ -117,7 +117,11 @@ fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
         if let Some((m, n_is_first)) = find(n, other) {
             let q = &pairs[m];
             let n_param = if n_is_first { q.closest.s } else { q.closest.t };
-            let n_at_shared = if n < me { n_param >= 1.0 - END } else { n_param <= END };
+            let n_at_shared = if n < me {
+                n_param >= 1.0 - END
+            } else {
+                n_param <= END
+            };
             if !n_at_shared || n < me {
                 return true;
             }
@@ -353,15 +357,19 @@ impl World {
             let off = self.node_offset[b];
             for i in 0..rod.nodes() {
                 let d = node_dof(i);
-                for c in 0..3 {
-                    self.forces[b][d + c] += node_forces[off + i][c];
+                for (f, n) in self.forces[b][d..d + 3]
+                    .iter_mut()
+                    .zip(node_forces[off + i].iter())
+                {
+                    *f += n;
                 }
             }
         }
         self.warm_ids.clear();
         self.warm_ids.extend_from_slice(&self.pair_ids);
         self.warm_forces.clear();
-        self.warm_forces.extend_from_slice(self.gauss_seidel.contact_forces());
+        self.warm_forces
+            .extend_from_slice(self.gauss_seidel.contact_forces());
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {

@@ -106,7 +106,11 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     };
     if let Err(errors) = params.validate() {
         report.status = Status::Invalid;
-        report.reason = errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("; ");
+        report.reason = errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("; ");
         return report;
     }
     let spec = KnotSpec {
@@ -180,12 +184,19 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     let relax_steps = (params.relax_time / params.dt).round() as u64;
     for _ in 0..relax_steps {
         if let Err(e) = world.step(params.dt) {
-            return finish(report, world, Status::Diverged, format!("while relaxing: {e}"), started);
+            return finish(
+                report,
+                world,
+                Status::Diverged,
+                format!("while relaxing: {e}"),
+                started,
+            );
         }
         report.stats.relax_steps += 1;
         let ke = world.rods[0].kinetic_energy();
         let mut g = vec![0.0; world.rods[0].ndof()];
-        let elastic = crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut g, None).total();
+        let elastic =
+            crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut g, None).total();
         if ke <= params.relax_tolerance * elastic {
             break;
         }
@@ -204,7 +215,8 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     let mut next_sample = start_l_k_bar;
     let mut history: VecDeque<Frame> = VecDeque::with_capacity(FRAME_HISTORY);
     let criteria = InversionCriteria::default();
-    let mid = world.rods[0].nodes() / 2;
+    // The loop's middle node, from the builder and then tracked from each sample's braid ends.
+    let mut mid = (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2;
     let mut time = 0.0;
     loop {
         let step = match world.step(params.dt) {
@@ -234,8 +246,12 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         let force = 0.5 * (f_start + f_finish);
         let points = rod.positions();
         let pairs = world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
-        let geometry = measurements::braid_ends(pairs, mid).map(|(p, q)| measurements::loop_geometry(&points, p, q));
+        let geometry =
+            measurements::braid_ends(pairs, mid).map(|(p, q)| measurements::loop_geometry(&points, p, q));
         let (width, height) = geometry.map_or((0.0, 0.0), |g| (g.width, g.height));
+        if let Some(g) = geometry {
+            mid = (g.start + g.end) / 2;
+        }
         report.series.push(Sample {
             time,
             l_k_bar,
@@ -258,7 +274,15 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         if report.inversion.is_none() {
             report.inversion = measurements::detect_inversion(&report.series, &criteria);
             if let Some(inv) = &report.inversion {
-                let at = |label: &str, l: f64| history.iter().min_by(|a, b| (a.l_k_bar - l).abs().total_cmp(&(b.l_k_bar - l).abs())).map(|f| Frame { label: label.to_string(), ..f.clone() });
+                let at = |label: &str, l: f64| {
+                    history
+                        .iter()
+                        .min_by(|a, b| (a.l_k_bar - l).abs().total_cmp(&(b.l_k_bar - l).abs()))
+                        .map(|f| Frame {
+                            label: label.to_string(),
+                            ..f.clone()
+                        })
+                };
                 report.frames.extend(at("before_inversion", inv.l_k_bar + 2.0));
                 report.frames.extend(at("at_inversion", inv.l_k_bar));
             }
@@ -302,7 +326,13 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     finish(report, world, Status::Completed, String::new(), started)
 }
 
-fn finish(mut report: CaseReport, world: World, status: Status, reason: String, started: std::time::Instant) -> CaseReport {
+fn finish(
+    mut report: CaseReport,
+    world: World,
+    status: Status,
+    reason: String,
+    started: std::time::Instant,
+) -> CaseReport {
     report.status = status;
     report.reason = reason;
     if status != Status::Completed {

@@ -23,7 +23,7 @@ pub struct NewtonOptions {
     /// moment entry below `rtol * F_s * mean edge length`, where F_s is the
     /// problem's force scale (`force_scale`, by default EI/L^2 plus the weight).
     /// The force tolerance never drops below the roundoff floor of the
-    /// stretching forces, 100 eps EA X / l_e (X: largest coordinate, l_e: mean
+    /// stretching forces, 100 eps EA X / l_e (X: largest node coordinate or L, l_e: mean
     /// edge length), which no iterate can beat.
     pub rtol: f64,
     /// Force scale F_s (N); `None` takes EI/L^2 + |g| rho A L.
@@ -167,7 +167,11 @@ impl Stepper {
                     report.newton_iterations += iterations;
                     halvings += 1;
                     if halvings > self.options.max_halvings {
-                        return Err(StepError::NotConverged { halvings: halvings - 1, dt: h, reason });
+                        return Err(StepError::NotConverged {
+                            halvings: halvings - 1,
+                            dt: h,
+                            reason,
+                        });
                     }
                     h /= 2.0;
                 }
@@ -200,12 +204,18 @@ impl Stepper {
         let gamma = env.damping;
         let c_in = (1.0 + gamma * h) / (h * h);
         let edge = rod.length() / rod.edges() as f64;
-        let extent = rod.q_old.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(rod.length());
+        let extent = (0..rod.nodes())
+            .map(|i| rod.node(i).amax())
+            .fold(rod.length(), f64::max);
         let floor = 100.0 * f64::EPSILON * rod.section.ea * extent / edge;
         let f_tol = (self.options.rtol * self.force_scale(rod, env)).max(floor);
         let m_tol = f_tol * edge;
         for j in 0..rod.ndof() {
-            let v = if rod.fixed[j] { rod.prescribed_velocity[j] } else { rod.velocity[j] };
+            let v = if rod.fixed[j] {
+                rod.prescribed_velocity[j]
+            } else {
+                rod.velocity[j]
+            };
             rod.q[j] = rod.q_old[j] + h * v;
         }
         rod.update_geometry();
@@ -232,7 +242,10 @@ impl Stepper {
                     self.hess.constrain(j);
                 }
             }
-            let inertia = self.ldlt.factor(&self.hess).map_err(|_| (NewtonFailure::Singular, iteration))?;
+            let inertia = self
+                .ldlt
+                .factor(&self.hess)
+                .map_err(|_| (NewtonFailure::Singular, iteration))?;
             negative_pivots = inertia.negative;
             let mut slope = 0.0;
             for j in 0..rod.ndof() {

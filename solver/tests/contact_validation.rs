@@ -9,7 +9,11 @@ fn assert_case(name: &str) {
     let rows = (case.run)();
     assert!(!rows.is_empty());
     for r in &rows {
-        assert!(r.pass, "{} failed: expected {:e}, got {:e}, error {:e} > {:e} ({})", r.case, r.expected, r.got, r.error, r.tolerance, r.quantity);
+        assert!(
+            r.pass,
+            "{} failed: expected {:e}, got {:e}, error {:e} > {:e} ({})",
+            r.case, r.expected, r.got, r.error, r.tolerance, r.quantity
+        );
     }
 }
 

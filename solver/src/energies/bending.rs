@@ -61,9 +61,11 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) -> f64
         + sym(&kb, &m2f) / (4.0 * nf2);
     let b1 = (id + outer(&te, &tf)) * (-k1 / (chi * nef))
         + (ttt * (2.0 * k1) - outer(&tf_x_m2, &tt) + outer(&tt, &te_x_m2) - mt2.cross_matrix()) / nef;
-    let a2 = (ttt * (2.0 * k2) + sym(&tf_x_m1, &tt)) / ne2 - pe * (k2 / (chi * ne2))
+    let a2 = (ttt * (2.0 * k2) + sym(&tf_x_m1, &tt)) / ne2
+        - pe * (k2 / (chi * ne2))
         - sym(&kb, &m1e) / (4.0 * ne2);
-    let c2 = (ttt * (2.0 * k2) - sym(&te_x_m1, &tt)) / nf2 - pf * (k2 / (chi * nf2))
+    let c2 = (ttt * (2.0 * k2) - sym(&te_x_m1, &tt)) / nf2
+        - pf * (k2 / (chi * nf2))
         - sym(&kb, &m1f) / (4.0 * nf2);
     let b2 = (id + outer(&te, &tf)) * (-k2 / (chi * nef))
         + (ttt * (2.0 * k2) + outer(&tf_x_m1, &tt) - outer(&tt, &te_x_m1) + mt1.cross_matrix()) / nef;
@@ -76,8 +78,10 @@ pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) -> f64
     scatter_stencil(&mut out.hess, &a, &b, &c, (ei_l, ei_l * dthe2, ei_l * dthf2));
     // Mixed (position, th) derivatives, combined over k1 and k2.
     let mixed = |m1: &Vector3<f64>, m2: &Vector3<f64>| {
-        let de = (tt * (0.5 * (k1 * kb.dot(m1) + k2 * kb.dot(m2))) - tf.cross(&(m1 * k1 + m2 * k2)) / chi) / ne;
-        let df = (tt * (0.5 * (k1 * kb.dot(m1) + k2 * kb.dot(m2))) + te.cross(&(m1 * k1 + m2 * k2)) / chi) / nf;
+        let de =
+            (tt * (0.5 * (k1 * kb.dot(m1) + k2 * kb.dot(m2))) - tf.cross(&(m1 * k1 + m2 * k2)) / chi) / ne;
+        let df =
+            (tt * (0.5 * (k1 * kb.dot(m1) + k2 * kb.dot(m2))) + te.cross(&(m1 * k1 + m2 * k2)) / chi) / nf;
         (de, df)
     };
     for (col, (m1, m2)) in [(3usize, (m1e, m2e)), (7usize, (m1f, m2f))] {

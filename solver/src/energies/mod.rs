@@ -107,7 +107,12 @@ pub fn evaluate(rod: &Rod, terms: Terms, grad: &mut [f64], mut hess: Option<&mut
     out
 }
 
-fn add_local<const N: usize>(offset: usize, local: &Local<N>, grad: &mut [f64], hess: Option<&mut BandedSym>) {
+fn add_local<const N: usize>(
+    offset: usize,
+    local: &Local<N>,
+    grad: &mut [f64],
+    hess: Option<&mut BandedSym>,
+) {
     for (g, l) in grad[offset..offset + N].iter_mut().zip(local.grad.iter()) {
         *g += l;
     }
@@ -128,7 +133,14 @@ pub(crate) fn scatter_stencil(
     (scale, dthe2, dthf2): (f64, f64, f64),
 ) {
     let bt = b.transpose();
-    let blocks = [(0, 0, *a), (4, 0, bt - a), (4, 4, a - b - bt + c), (8, 0, -bt), (8, 4, bt - c), (8, 8, *c)];
+    let blocks = [
+        (0, 0, *a),
+        (4, 0, bt - a),
+        (4, 4, a - b - bt + c),
+        (8, 0, -bt),
+        (8, 4, bt - c),
+        (8, 8, *c),
+    ];
     for (r, col, m) in blocks {
         let mut v = hess.fixed_view_mut::<3, 3>(r, col);
         v += m * scale;

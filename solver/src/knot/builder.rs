@@ -10,7 +10,7 @@
 //! loop shape closes the ring. The helix radius is `a = (1 + gap) h`, with the
 //! gap raised in steps until every pair of non-neighbouring segments (index
 //! gap `> ceil(2h / edge) + 1`) is at least `2h` apart.
-use super::geometry::{Braid, Plan, loop_drift, sinc};
+use super::geometry::{Braid, Dense, Plan, loop_drift, sinc};
 use super::topology::{TopologyError, expected_determinant, knot_determinant};
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use nalgebra::Vector3;
@@ -40,7 +40,12 @@ const MAX_THETA: f64 = 0.75 * PI;
 /// Largest `|alpha|` of the loop profile.
 const MAX_ALPHA: f64 = 0.8;
 /// Samples of the braid angle when bracketing the feasible end-to-end range.
-const SCAN: usize = 96;
+const SCAN: usize = 48;
+/// The reported end-to-end range is shrunk by this fraction of its width at
+/// each end (the resampling excess moves its edges slightly).
+const WINDOW_MARGIN: f64 = 2e-3;
+/// The default end-to-end distance stays this fraction of the width inside.
+const DEFAULT_MARGIN: f64 = 0.05;
 
 /// Default strand length per braid pass, loop remainder and end-to-end
 /// distance, as fractions of `L`, for `n = 1..=8` (`n <= 4`: the relaxed
@@ -140,14 +145,26 @@ pub enum KnotError {
     InvalidParameter { name: &'static str, value: f64 },
     #[error("radius h = {radius} m is too large: the rod length requires h < L/50 = {max} m")]
     RadiusTooLarge { radius: f64, max: f64 },
-    #[error("{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}")]
+    #[error(
+        "{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}"
+    )]
     TooFewNodes { nodes: usize, min: usize },
-    #[error("braid strand length {braid_length} m is too short for 2n+1 half twists of radius h: need {min} m")]
+    #[error(
+        "braid strand length {braid_length} m is too short for 2n+1 half twists of radius h: need {min} m"
+    )]
     BraidTooShort { braid_length: f64, min: f64 },
     #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
     TailsTooShort { tail_length: f64, min: f64 },
-    #[error("no valid shape: the loop of {loop_length} m cannot close around the braid with these lengths")]
-    Infeasible { loop_length: f64 },
+    #[error(
+        "no valid shape with braid passes of {braid_length} m, a loop of {loop_length} m and tails of \
+         {tail_length} m: the loop cannot close around the braid, or the tails cannot reach the axis, \
+         with bend radii of at least 3 helix radii"
+    )]
+    Infeasible {
+        braid_length: f64,
+        loop_length: f64,
+        tail_length: f64,
+    },
     #[error("end-to-end distance {end_to_end} m is outside the feasible range [{min}, {max}] m")]
     EndToEndOutOfRange { end_to_end: f64, min: f64, max: f64 },
     #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
@@ -161,11 +178,12 @@ pub enum KnotError {
 /// Builds the knot described by `spec`.
 pub fn build(spec: &KnotSpec) -> Result<KnotShape, KnotError> {
     validate(spec)?;
+    let lengths = lengths(spec)?;
     let mut clearance = None;
     for gap in GAPS {
-        match attempt(spec, gap) {
+        match attempt(spec, &lengths, gap) {
             Err(e @ KnotError::Clearance { .. }) => clearance = Some(e),
-            // A larger gap may make the braid infeasible; report the clearance.
+            // A larger gap may make the shape infeasible; report the clearance.
             Err(e) => return Err(clearance.unwrap_or(e)),
             Ok(shape) => return Ok(shape),
         }
@@ -183,7 +201,10 @@ fn validate(spec: &KnotSpec) -> Result<(), KnotError> {
         ("loop_length", spec.loop_length),
     ];
     let given = optional.into_iter().filter_map(|(name, v)| v.map(|v| (name, v)));
-    for (name, value) in [("length", spec.length), ("radius", spec.radius)].into_iter().chain(given) {
+    for (name, value) in [("length", spec.length), ("radius", spec.radius)]
+        .into_iter()
+        .chain(given)
+    {
         if !(value.is_finite() && value > 0.0) {
             return Err(KnotError::InvalidParameter { name, value });
         }
@@ -203,6 +224,7 @@ struct Design {
     braid: Braid,
     strands: StrandTable,
     strand_length: f64,
+    straight_centreline: f64,
     loop_length: f64,
     loop_steps: usize,
     edge: f64,
@@ -227,11 +249,34 @@ impl StrandTable {
             cos_psi.push(psi.cos());
             twist.push((braid.radius * dpsi).powi(2));
         }
-        Self { weights, cos_psi, twist }
+        Self {
+            weights,
+            cos_psi,
+            twist,
+        }
     }
 }
 
 impl Design {
+    /// Helix radius `(1 + gap) h`, lengths still unset.
+    fn new(spec: &KnotSpec, gap: f64) -> Self {
+        let braid = Braid {
+            passes: spec.n,
+            radius: (1.0 + gap) * spec.radius,
+        };
+        let edge = spec.length / (spec.nodes.max(2) - 1) as f64;
+        Self {
+            braid,
+            strands: StrandTable::new(&braid),
+            strand_length: 0.0,
+            straight_centreline: 0.0,
+            loop_length: 0.0,
+            loop_steps: 0,
+            edge,
+            spacing: edge.min(braid.radius) / 4.0,
+        }
+    }
+
     /// Mean strand length over a braid of centreline `b` and half angle
     /// `theta`, with its derivative in `b`.
     fn strand(&self, b: f64, theta: f64) -> (f64, f64) {
@@ -248,9 +293,22 @@ impl Design {
         acc
     }
 
-    /// Braid centreline giving the strand length (Newton from the strand length).
+    /// Sets the strand and loop lengths.
+    fn set_lengths(&mut self, strand: f64, loop_length: f64) {
+        self.strand_length = strand;
+        self.straight_centreline = self.newton(strand, 0.0);
+        self.loop_length = loop_length;
+        self.loop_steps = (loop_length / self.spacing).ceil() as usize;
+    }
+
+    /// Braid centreline giving the strand length at half angle `theta`
+    /// (it differs from the straight braid's only at second order in `theta`).
     fn centreline(&self, theta: f64) -> f64 {
-        let mut b = self.strand_length;
+        self.newton(self.straight_centreline, theta)
+    }
+
+    /// Newton iteration for the centreline, from `b`.
+    fn newton(&self, mut b: f64, theta: f64) -> f64 {
         for _ in 0..30 {
             let (len, dlen) = self.strand(b, theta);
             let step = (len - self.strand_length) / dlen;
@@ -302,23 +360,15 @@ impl Design {
             clamp_section: self.clamp_section(tail),
         };
         let a = self.braid.radius;
-        let tails_ok = theta == 0.0 || plan.tail_radius() >= MIN_BEND * a;
-        (tails_ok && plan.tail_min_x() >= 2.0 * a).then_some((plan, bound, target))
+        let tails_ok = plan.tail_radius() >= MIN_BEND * a && plan.tail_min_x() >= 2.0 * a;
+        tails_ok.then_some((plan, bound, target))
     }
 
-    /// The plan at `theta`, its loop closed (bisection on the increasing
-    /// drift), if all constraints hold.
+    /// The plan at `theta`, its loop closed, if all constraints hold.
     fn plan(&self, tail: f64, theta: f64) -> Option<Plan> {
         let (mut plan, bound, target) = self.candidate(tail, theta)?;
-        let (mut lo, mut hi) = (-bound, bound);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if loop_drift(theta, mid, self.loop_steps) < target { lo = mid } else { hi = mid }
-        }
-        plan.alpha = 0.5 * (lo + hi);
+        let closure = |alpha| loop_drift(theta, alpha, self.loop_steps) - target;
+        plan.alpha = increasing_root(closure, -bound, bound, 1e-15);
         Some(plan)
     }
 
@@ -330,49 +380,48 @@ impl Design {
         let last = grid.iter().rposition(|&t| ok(t))?;
         // Refine each end between its feasible sample and the infeasible neighbour.
         let refine = |mut good: f64, mut bad: f64| {
-            for _ in 0..40 {
+            for _ in 0..20 {
                 let mid = 0.5 * (good + bad);
                 if ok(mid) { good = mid } else { bad = mid }
             }
             good
         };
-        let lo = if first == 0 { 0.0 } else { refine(grid[first], grid[first - 1]) };
-        let hi = if last == SCAN { MAX_THETA } else { refine(grid[last], grid[last + 1]) };
+        let lo = if first == 0 {
+            0.0
+        } else {
+            refine(grid[first], grid[first - 1])
+        };
+        let hi = if last == SCAN {
+            MAX_THETA
+        } else {
+            refine(grid[last], grid[last + 1])
+        };
         Some((lo, hi))
     }
 
-    /// Braid half angle giving the half span (decreasing in `theta`), by bisection.
-    fn angle_for(&self, tail: f64, half_span: f64, (lo, hi): (f64, f64)) -> f64 {
-        let (mut lo, mut hi) = (lo, hi);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if self.half_span(tail, mid) > half_span { lo = mid } else { hi = mid }
-        }
-        0.5 * (lo + hi)
+    /// Braid half angle giving the half span (decreasing in `theta`), if
+    /// some angle in `[0, MAX_THETA]` does.
+    fn angle_for(&self, tail: f64, half_span: f64) -> Option<f64> {
+        let excess = |theta| half_span - self.half_span(tail, theta);
+        let theta = increasing_root(excess, 0.0, MAX_THETA, 1e-15 * half_span);
+        (excess(theta).abs() <= 1e-12 * half_span).then_some(theta)
     }
 }
 
-fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
-    let (n, length, h) = (spec.n, spec.length, spec.radius);
-    let index = n as usize - 1;
-    let braid = Braid {
-        passes: n,
-        radius: (1.0 + gap) * h,
-    };
-    let edge = length / (spec.nodes.max(2) - 1) as f64;
-    let mut design = Design {
-        braid,
-        strands: StrandTable::new(&braid),
-        strand_length: 0.0,
-        loop_length: 0.0,
-        loop_steps: 0,
-        edge,
-        spacing: edge.min(braid.radius) / 8.0,
-    };
-    let shortest = design.strand(braid.min_centreline(MIN_PITCH), 0.0).0;
+/// Strand length per braid pass, loop length and tail length, resolved from
+/// the spec and checked with the smallest helix radius.
+#[derive(Clone, Copy)]
+struct Lengths {
+    strand: f64,
+    loop_length: f64,
+    tail: f64,
+}
+
+fn lengths(spec: &KnotSpec) -> Result<Lengths, KnotError> {
+    let (length, h) = (spec.length, spec.radius);
+    let index = spec.n as usize - 1;
+    let design = Design::new(spec, GAPS[0]);
+    let shortest = design.strand(design.braid.min_centreline(MIN_PITCH), 0.0).0;
     let strand = spec
         .braid_length
         .unwrap_or((DEFAULT_BRAID[index] * length).max(BRAID_MARGIN * shortest));
@@ -382,8 +431,8 @@ fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
             min: shortest,
         });
     }
-    let max_edge = (MAX_EDGE_RADII * h).min(strand / (MIN_EDGES_PER_PASS * braid.half_twists()));
-    if edge > max_edge {
+    let max_edge = (MAX_EDGE_RADII * h).min(strand / (MIN_EDGES_PER_PASS * design.braid.half_twists()));
+    if design.edge > max_edge {
         return Err(KnotError::TooFewNodes {
             nodes: spec.nodes,
             min: (length / max_edge).ceil() as usize + 1,
@@ -393,50 +442,182 @@ fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
         .loop_length
         .unwrap_or(length - 2.0 * strand - 2.0 * DEFAULT_TAIL[index] * length);
     let tail = 0.5 * (length - 2.0 * strand - loop_length);
-    let min_tail = 3.0 * edge;
+    let min_tail = 3.0 * design.edge;
     if tail < min_tail {
         return Err(KnotError::TailsTooShort {
             tail_length: tail,
             min: min_tail,
         });
     }
-    design.strand_length = strand;
-    design.loop_length = loop_length;
-    design.loop_steps = (loop_length / design.spacing).ceil() as usize;
+    Ok(Lengths {
+        strand,
+        loop_length,
+        tail,
+    })
+}
 
-    let angles = design.feasible_angles(tail).ok_or(KnotError::Infeasible { loop_length })?;
-    let (min, max) = (2.0 * design.half_span(tail, angles.1), 2.0 * design.half_span(tail, angles.0));
-    let end_to_end = match spec.end_to_end {
-        Some(l) if l < min || l > max => {
-            return Err(KnotError::EndToEndOutOfRange { end_to_end: l, min, max });
+/// Root of an increasing `f` with `f(lo) <= 0 <= f(hi)`, to `|f| <= tol` or
+/// an interval at rounding level (regula falsi, Illinois variant).
+fn increasing_root(mut f: impl FnMut(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
+    let (mut f_lo, mut f_hi) = (f(lo), f(hi));
+    if f_lo >= 0.0 {
+        return lo;
+    }
+    if f_hi <= 0.0 {
+        return hi;
+    }
+    let mut last_side = 0;
+    for _ in 0..200 {
+        let secant = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let x = if secant > lo && secant < hi {
+            secant
+        } else {
+            0.5 * (lo + hi)
+        };
+        if x <= lo || x >= hi {
+            return x;
         }
-        Some(l) => l,
-        None => {
-            let margin = 0.05 * (max - min);
-            (DEFAULT_END_TO_END[index] * length).clamp(min + margin, max - margin)
+        let fx = f(x);
+        if fx.abs() <= tol {
+            return x;
         }
-    };
-
-    // Resampling with equal chords consumes slightly more than L of curve:
-    // lengthen the tails by that excess until the last node lands on clamp B.
-    let extension = 4.0 * edge + 1e-3 * length;
-    let mut curve = length;
-    let mut result = None;
-    for _ in 0..8 {
-        let tail = 0.5 * (curve - 2.0 * strand - loop_length);
-        let theta = design.angle_for(tail, 0.5 * end_to_end, angles);
-        let plan = design.plan(tail, theta).ok_or(KnotError::Infeasible { loop_length })?;
-        let dense = plan.dense(design.spacing, extension);
-        let (points, positions) = resample(&dense.points, &dense.arc, edge, spec.nodes);
-        let excess = positions[positions.len() - 1] - dense.arc[dense.marks[4]];
-        curve += excess;
-        let done = excess.abs() <= 1e-13 * length;
-        result = Some((plan, dense, points, positions));
-        if done {
-            break;
+        if fx < 0.0 {
+            (lo, f_lo) = (x, fx);
+            if last_side < 0 {
+                f_hi *= 0.5;
+            }
+            last_side = -1;
+        } else {
+            (hi, f_hi) = (x, fx);
+            if last_side > 0 {
+                f_lo *= 0.5;
+            }
+            last_side = 1;
         }
     }
-    let (plan, dense, points, positions) = result.expect("at least one iteration");
+    0.5 * (lo + hi)
+}
+
+/// Feasible clamp-to-clamp distances `[min, max]`.
+struct Window {
+    min: f64,
+    max: f64,
+}
+
+impl Window {
+    /// `fraction * L`, moved `DEFAULT_MARGIN` of the width inside the window.
+    fn default(&self, fraction: f64, length: f64) -> f64 {
+        let margin = DEFAULT_MARGIN * (self.max - self.min);
+        (fraction * length).clamp(self.min + margin, self.max - margin)
+    }
+
+    /// The range reported to users: shrunk by `WINDOW_MARGIN` of the width,
+    /// since the window moves slightly with the end-to-end distance (through
+    /// the resampling excess).
+    fn reported(&self) -> (f64, f64) {
+        let margin = WINDOW_MARGIN * (self.max - self.min);
+        (self.min + margin, self.max - margin)
+    }
+}
+
+/// A resampled knot: its plan, dense curve, nodes and their arc positions on
+/// the dense curve.
+struct Resampled {
+    plan: Plan,
+    dense: Dense,
+    points: Vec<Vector3<f64>>,
+    positions: Vec<f64>,
+}
+
+impl Design {
+    fn infeasible(&self, tail: f64) -> KnotError {
+        KnotError::Infeasible {
+            braid_length: self.strand_length,
+            loop_length: self.loop_length,
+            tail_length: tail,
+        }
+    }
+
+    /// The end-to-end window for tails of length `tail`.
+    fn window(&self, tail: f64) -> Result<Window, KnotError> {
+        let (lo, hi) = self.feasible_angles(tail).ok_or_else(|| self.infeasible(tail))?;
+        Ok(Window {
+            min: 2.0 * self.half_span(tail, hi),
+            max: 2.0 * self.half_span(tail, lo),
+        })
+    }
+
+    /// Resamples the knot with clamp-to-clamp distance `end_to_end` to
+    /// `nodes` equal chords. These consume slightly more than `L` of curve,
+    /// so the designed curve (initially `curve` long) is lengthened, in the
+    /// tails, by that excess until the last node lands on clamp B. Returns
+    /// the knot and the converged curve length, or `None` if some iterate
+    /// has no feasible shape.
+    fn resample(&self, end_to_end: f64, mut curve: f64, nodes: usize) -> Option<(Resampled, f64)> {
+        // Beyond clamp B, more than the excess (a few per mille of L).
+        let extension = 4.0 * self.edge + 0.02 * curve;
+        let mut result = None;
+        for _ in 0..8 {
+            let tail = 0.5 * (curve - 2.0 * self.strand_length - self.loop_length);
+            let theta = self.angle_for(tail, 0.5 * end_to_end)?;
+            let plan = self.plan(tail, theta)?;
+            let dense = plan.dense(self.spacing, extension);
+            let (points, positions) = equal_chords(&dense.points, &dense.arc, self.edge, nodes)?;
+            let excess = positions[positions.len() - 1] - dense.arc[dense.marks[4]];
+            curve += excess;
+            result = Some(Resampled {
+                plan,
+                dense,
+                points,
+                positions,
+            });
+            if excess.abs() <= 1e-13 * curve {
+                break;
+            }
+        }
+        result.map(|r| (r, curve))
+    }
+}
+
+fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, KnotError> {
+    let (n, length, h) = (spec.n, spec.length, spec.radius);
+    let fraction = DEFAULT_END_TO_END[n as usize - 1];
+    let Lengths {
+        strand,
+        loop_length,
+        tail,
+    } = *lengths;
+    let mut design = Design::new(spec, gap);
+    design.set_lengths(strand, loop_length);
+
+    // A provisional knot gives the resampling excess; the window is then
+    // computed for the tails lengthened by it.
+    let window = design.window(tail)?;
+    let provisional = spec.end_to_end.map_or_else(
+        || window.default(fraction, length),
+        |l| l.clamp(window.min, window.max),
+    );
+    let (_, curve) = design
+        .resample(provisional, length, spec.nodes)
+        .ok_or_else(|| design.infeasible(tail))?;
+    let window = design.window(0.5 * (curve - 2.0 * strand - loop_length))?;
+    let (min, max) = window.reported();
+    let out_of_range = |end_to_end| KnotError::EndToEndOutOfRange { end_to_end, min, max };
+    let end_to_end = match spec.end_to_end {
+        Some(l) if l < window.min || l > window.max => return Err(out_of_range(l)),
+        Some(l) => l,
+        None => window.default(fraction, length),
+    };
+    let (knot, _) = design
+        .resample(end_to_end, curve, spec.nodes)
+        .ok_or_else(|| out_of_range(end_to_end))?;
+
+    let Resampled {
+        plan,
+        dense,
+        points,
+        positions,
+    } = knot;
     let cut = |mark: usize| positions.partition_point(|&s| s < dense.arc[dense.marks[mark]]);
     let [a, b, c, d] = [0, 1, 2, 3].map(cut);
     let regions = Regions {
@@ -446,7 +627,7 @@ fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
         braid_b: c..d,
         tail_b: d..points.len(),
     };
-    check_clearance(&points, h, edge)?;
+    check_clearance(&points, h, design.edge)?;
     let expected = expected_determinant(n);
     let got = knot_determinant(&points)?;
     if got != expected {
@@ -456,25 +637,30 @@ fn attempt(spec: &KnotSpec, gap: f64) -> Result<KnotShape, KnotError> {
         end_to_end: points[points.len() - 1].x - points[0].x,
         points,
         regions,
-        edge_length: edge,
+        edge_length: design.edge,
         braid_length: strand,
         loop_length,
         tail_length: plan.tail_length,
-        helix_radius: braid.radius,
+        helix_radius: design.braid.radius,
     })
 }
 
 /// `count` nodes along the dense polyline from its start, consecutive nodes
 /// exactly `edge` apart (each next node is the first point of the polyline,
-/// past the current one, at distance `edge`); returns the nodes and their arc
-/// positions on the polyline.
-fn resample(dense: &[Vector3<f64>], arc: &[f64], edge: f64, count: usize) -> (Vec<Vector3<f64>>, Vec<f64>) {
+/// past the current one, at distance `edge`), and their arc positions on the
+/// polyline; `None` if the polyline is too short.
+fn equal_chords(
+    dense: &[Vector3<f64>],
+    arc: &[f64],
+    edge: f64,
+    count: usize,
+) -> Option<(Vec<Vector3<f64>>, Vec<f64>)> {
     let mut nodes = vec![dense[0]];
     let mut positions = vec![0.0];
     let mut next = 1;
     while nodes.len() < count {
         let p = nodes[nodes.len() - 1];
-        while (dense[next] - p).norm() < edge {
+        while (dense.get(next)? - p).norm() < edge {
             next += 1;
         }
         // The node lies on dense segment (next - 1, next), whose start is
@@ -485,7 +671,7 @@ fn resample(dense: &[Vector3<f64>], arc: &[f64], edge: f64, count: usize) -> (Ve
         nodes.push(dense[next - 1] + t * d);
         positions.push(arc[next - 1] + t * (arc[next] - arc[next - 1]));
     }
-    (nodes, positions)
+    Some((nodes, positions))
 }
 
 /// Fails if two non-neighbouring segments are closer than `2h`.
@@ -510,5 +696,18 @@ fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), Kno
             required: 2.0 * h,
         }),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn increasing_root_converges_and_clamps() {
+        let x = increasing_root(|x| x * x * x - 2.0, 0.0, 2.0, 1e-15);
+        assert!((x - 2f64.cbrt()).abs() < 1e-14);
+        assert_eq!(increasing_root(|x| x + 1.0, 0.0, 1.0, 1e-15), 0.0);
+        assert_eq!(increasing_root(|x| x - 5.0, 0.0, 1.0, 1e-15), 1.0);
     }
 }

@@ -21,14 +21,23 @@ const RAMP: f64 = 0.15;
 
 /// `sin(x) / x`.
 pub fn sinc(x: f64) -> f64 {
-    if x.abs() < 1e-4 { 1.0 - x * x / 6.0 } else { x.sin() / x }
+    if x.abs() < 1e-4 {
+        1.0 - x * x / 6.0
+    } else {
+        x.sin() / x
+    }
 }
 
 /// Normalised twist `w(u)` and `w'(u)` on `u in [0, 1]`: `w' = S(u / RAMP) /
 /// (1 - RAMP)` on the ramps (`S` the smoothstep) and `1 / (1 - RAMP)` between.
 fn twist(u: f64) -> (f64, f64) {
     let m = 1.0 / (1.0 - RAMP);
-    let ramp = |t: f64| (m * RAMP * (t * t * t - 0.5 * t * t * t * t), m * t * t * (3.0 - 2.0 * t));
+    let ramp = |t: f64| {
+        (
+            m * RAMP * (t * t * t - 0.5 * t * t * t * t),
+            m * t * t * (3.0 - 2.0 * t),
+        )
+    };
     if u < RAMP {
         ramp(u / RAMP)
     } else if u > 1.0 - RAMP {
@@ -138,7 +147,11 @@ impl Plan {
 
     /// Smallest x of tail B (tail A mirrors it): the tails stay apart if positive.
     pub fn tail_min_x(&self) -> f64 {
-        let dip = if self.theta > 0.5 * PI { self.tail_radius() * (1.0 - self.theta.sin()) } else { 0.0 };
+        let dip = if self.theta > 0.5 * PI {
+            self.tail_radius() * (1.0 - self.theta.sin())
+        } else {
+            0.0
+        };
         self.half_width() - dip
     }
 
@@ -193,8 +206,11 @@ impl Plan {
 
         // Tail A mirrors tail B up to its clamp, traversed towards the braid;
         // each later piece starts where the previous one ends.
-        let mut points: Vec<Vector3<f64>> =
-            tail_b[..=clamp].iter().rev().map(|p| Vector3::new(-p.x, p.y, p.z)).collect();
+        let mut points: Vec<Vector3<f64>> = tail_b[..=clamp]
+            .iter()
+            .rev()
+            .map(|p| Vector3::new(-p.x, p.y, p.z))
+            .collect();
         let mut marks = [points.len() - 1; 5];
         points.extend(strand(1.0));
         marks[1] = points.len() - 1;
@@ -219,6 +235,45 @@ impl Plan {
             points,
             arc: arc_len,
             marks,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn twist_is_continuous_and_reaches_one() {
+        assert_eq!(twist(0.0), (0.0, 0.0));
+        assert!((twist(1.0).0 - 1.0).abs() < 1e-15 && twist(1.0).1 == 0.0);
+        for u in [RAMP, 1.0 - RAMP] {
+            let (below, above) = (twist(u - 1e-12), twist(u + 1e-12));
+            assert!((below.0 - above.0).abs() < 1e-11 && (below.1 - above.1).abs() < 1e-9);
+        }
+        // w' integrates to w.
+        let steps = 100_000;
+        let integral: f64 = (0..steps)
+            .map(|i| twist((i as f64 + 0.5) / steps as f64).1)
+            .sum::<f64>()
+            / steps as f64;
+        assert!((integral - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn braid_strands_end_on_opposite_sides() {
+        let braid = Braid {
+            passes: 3,
+            radius: 0.01,
+        };
+        let (b, kappa) = (0.3, 2.0);
+        for sign in [1.0, -1.0] {
+            let (start, end) = (braid.point(0.0, b, kappa, sign), braid.point(1.0, b, kappa, sign));
+            assert!(
+                (start.z + sign * 0.01).abs() < 1e-15,
+                "strand enters on the -sign z side"
+            );
+            assert!((end.z - sign * 0.01).abs() < 1e-15, "and leaves on the other");
         }
     }
 }

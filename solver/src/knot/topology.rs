@@ -118,7 +118,11 @@ fn closure(points: &[Vector3<f64>]) -> Result<(Vec<Vector3<f64>>, Vector3<f64>),
     let u = axis.normalize();
     let normal = best_fit_normal(points);
     let d = normal - normal.dot(&u) * u;
-    let direction = if d.norm() > 1e-6 { d.normalize() } else { perpendicular(&u) };
+    let direction = if d.norm() > 1e-6 {
+        d.normalize()
+    } else {
+        perpendicular(&u)
+    };
     let w = direction.cross(&u);
     let far = 2.0 * radius;
     let mut closed = points.to_vec();
@@ -176,7 +180,10 @@ struct Crossing {
 
 /// Determinant from the projection along the unit `direction`; `None` if the
 /// diagram is degenerate.
-fn diagram_determinant(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Result<Option<u64>, TopologyError> {
+fn diagram_determinant(
+    points: &[Vector3<f64>],
+    direction: &Vector3<f64>,
+) -> Result<Option<u64>, TopologyError> {
     match crossings(points, direction) {
         Some(crossings) => colouring_determinant(&crossings).map(Some),
         None => Ok(None),
@@ -189,7 +196,10 @@ fn crossings(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Option<Vec<Cr
     let n = points.len();
     let e1 = perpendicular(direction);
     let e2 = direction.cross(&e1);
-    let plane: Vec<Vector2<f64>> = points.iter().map(|p| Vector2::new(p.dot(&e1), p.dot(&e2))).collect();
+    let plane: Vec<Vector2<f64>> = points
+        .iter()
+        .map(|p| Vector2::new(p.dot(&e1), p.dot(&e2)))
+        .collect();
     let depth: Vec<f64> = points.iter().map(|p| p.dot(direction)).collect();
     let centroid = points.iter().sum::<Vector3<f64>>() / n as f64;
     let size = points.iter().map(|p| (p - centroid).norm()).fold(0.0, f64::max);
@@ -265,7 +275,7 @@ fn segment_crossing(plane: &[Vector2<f64>], i: usize, j: usize) -> Intersection 
     let t = w.perp(&v) / denom;
     let s = w.perp(&r) / denom;
     let outside = |x: f64| !(-TOLERANCE..=1.0 + TOLERANCE).contains(&x);
-    let near_vertex = |x: f64| x < TOLERANCE || x > 1.0 - TOLERANCE;
+    let near_vertex = |x: f64| !(TOLERANCE..=1.0 - TOLERANCE).contains(&x);
     if outside(t) || outside(s) {
         Intersection::None
     } else if near_vertex(t) || near_vertex(s) {
@@ -302,7 +312,11 @@ fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
     // Chinese remainder: x = r0 + p0 * ((r1 - r0) / p0 mod p1), 0 <= x < p0 p1.
     let r0 = u128::from(residues[0]);
     let diff = (u128::from(residues[1]) + p1 - r0 % p1) % p1;
-    let k = mul_mod(diff as u64, pow_mod((p0 % p1) as u64, PRIMES[1] - 2, PRIMES[1]), PRIMES[1]);
+    let k = mul_mod(
+        diff as u64,
+        pow_mod((p0 % p1) as u64, PRIMES[1] - 2, PRIMES[1]),
+        PRIMES[1],
+    );
     let x = r0 + p0 * u128::from(k);
     let modulus = p0 * p1;
     let magnitude = x.min(modulus - x);
@@ -355,4 +369,43 @@ fn det_mod(matrix: &[i64], m: usize, p: u64) -> u64 {
         }
     }
     det % p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modular_determinant_matches_integer_determinant() {
+        // det = 2 (32 - 35) + (24 + 30) = 48; swapping two rows negates it.
+        let m = [2, -1, 0, 3, 4, 5, -6, 7, 8];
+        let swapped = [3, 4, 5, 2, -1, 0, -6, 7, 8];
+        for p in PRIMES {
+            assert_eq!(det_mod(&m, 3, p), 48);
+            assert_eq!(det_mod(&swapped, 3, p), p - 48);
+        }
+        assert_eq!(det_mod(&[1, 2, 2, 4], 2, PRIMES[0]), 0);
+    }
+
+    #[test]
+    fn colouring_matrix_of_standard_trefoil_diagram() {
+        // Standard trefoil diagram: positions 0..6 along the curve alternate
+        // over (even) and under (odd).
+        let crossings = [
+            Crossing {
+                over: 0.5,
+                under: 3.5,
+            },
+            Crossing {
+                over: 2.5,
+                under: 5.5,
+            },
+            Crossing {
+                over: 4.5,
+                under: 1.5,
+            },
+        ];
+        assert_eq!(colouring_determinant(&crossings), Ok(3));
+        assert_eq!(colouring_determinant(&crossings[..1]), Ok(1));
+    }
 }

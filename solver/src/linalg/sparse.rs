@@ -148,9 +148,7 @@ impl SparseSym {
             .map_err(|LdltError::ZeroPivot { index }| SparseError::RejectedPivot { index })?;
 
         let pivots: Vec<f64> = match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                s.col_ptr()[..n].iter().map(|&p| values[p]).collect()
-            }
+            SymbolicCholeskyRaw::Simplicial(s) => s.col_ptr()[..n].iter().map(|&p| values[p]).collect(),
             SymbolicCholeskyRaw::Supernodal(s) => {
                 let l = SupernodalLdltRef::new(s, &values);
                 (0..s.n_supernodes())
@@ -167,12 +165,7 @@ impl SparseSym {
                 return Err(FactorError::NonFinitePivot { index, pivot }.into());
             }
             if pivot.abs() <= PIVOT_RTOL * scale {
-                return Err(FactorError::SmallPivot {
-                    index,
-                    pivot,
-                    scale,
-                }
-                .into());
+                return Err(FactorError::SmallPivot { index, pivot, scale }.into());
             }
             if pivot > 0.0 {
                 inertia.positive += 1;
@@ -200,12 +193,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     fn rel_err(x: &[f64], y: &[f64]) -> f64 {
-        let num = x
-            .iter()
-            .zip(y)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let num = x.iter().zip(y).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
         let den = y.iter().map(|b| b * b).sum::<f64>().sqrt();
         num / den
     }
@@ -259,16 +247,11 @@ mod tests {
             assert_eq!(sparse_inertia, inertia);
             paths[usize::from(is_supernodal(&SparseSym::from_banded(&a)))] = true;
         }
-        assert_eq!(
-            paths,
-            [true, true],
-            "simplicial and supernodal both covered"
-        );
+        assert_eq!(paths, [true, true], "simplicial and supernodal both covered");
     }
 
     fn is_supernodal(s: &SparseSym) -> bool {
-        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(s.n, s.n, &s.entries)
-            .expect("assembly");
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(s.n, s.n, &s.entries).expect("assembly");
         let symbolic = factorize_symbolic_cholesky(
             mat.symbolic(),
             Side::Lower,

@@ -20,7 +20,11 @@ pub fn parallel_transport(v: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) 
 
 /// A unit vector perpendicular to the unit vector `a`.
 pub fn perpendicular(a: &Vector3<f64>) -> Vector3<f64> {
-    let trial = if a.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let trial = if a.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
     (trial - a * a.dot(&trial)).normalize()
 }
 

@@ -133,9 +133,7 @@ impl Rod {
         for (i, l) in rest_len.iter().enumerate() {
             mass[theta_dof(i)] = section.polar_inertia * l;
         }
-        let tangent: Vec<Vector3<f64>> = (0..ne)
-            .map(|i| (nodes[i + 1] - nodes[i]) / rest_len[i])
-            .collect();
+        let tangent: Vec<Vector3<f64>> = (0..ne).map(|i| (nodes[i + 1] - nodes[i]) / rest_len[i]).collect();
         let mut d1_old = Vec::with_capacity(ne);
         d1_old.push(perpendicular(&tangent[0]));
         for i in 1..ne {

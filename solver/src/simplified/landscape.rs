@@ -61,6 +61,8 @@ pub struct CriticalPoint {
     pub d2energy_dtheta2: f64,
     /// Stable with respect to theta: d²Ē/dθ² > 0.
     pub stable: bool,
+    /// Negative eigenvalues of the clamped loop's stiffness (0: loop stable).
+    pub loop_negative_pivots: usize,
     /// Loop centreline there (units of h).
     pub loop_centerline: Vec<[f64; 3]>,
 }
@@ -91,11 +93,16 @@ pub(crate) fn evaluate(solver: &mut LoopSolver) -> LandscapePoint {
     }
 }
 
-/// dĒ/dθ after moving `solver` to `theta` at its current l̄_k.
-pub(crate) fn gradient_at(solver: &mut LoopSolver, theta: f64) -> Result<f64, SimplifiedError> {
-    let lk = solver.l_k_bar();
-    solver.move_to(theta, lk)?;
+/// dĒ/dθ after moving `solver` along its branch to (`theta`, `l_k_bar`).
+pub(crate) fn gradient(solver: &mut LoopSolver, theta: f64, l_k_bar: f64) -> Result<f64, SimplifiedError> {
+    solver.move_to(theta, l_k_bar)?;
     Ok(evaluate(solver).denergy_dtheta)
+}
+
+/// dĒ/dθ after moving `solver` to `theta` at its current l̄_k.
+fn gradient_at(solver: &mut LoopSolver, theta: f64) -> Result<f64, SimplifiedError> {
+    let lk = solver.l_k_bar();
+    gradient(solver, theta, lk)
 }
 
 /// d²Ē/dθ² at the solver's state by central differences along the branch.
@@ -109,7 +116,7 @@ pub(crate) fn curvature_at(solver: &LoopSolver) -> Result<f64, SimplifiedError> 
 
 /// Refines a root of dĒ/dθ bracketed by (a, ga), (b, gb) with the Illinois
 /// method, moving `solver` (which starts at one end of the bracket) along the branch.
-fn refine_root(
+pub(crate) fn refine_root(
     solver: &mut LoopSolver,
     (mut a, mut ga): (f64, f64),
     (mut b, mut gb): (f64, f64),
@@ -144,7 +151,11 @@ fn refine_root(
 }
 
 /// The critical point bracketed by the last two grid points, from a copy of the solver.
-fn critical_point(solver: &LoopSolver, left: (f64, f64), right: (f64, f64)) -> Result<(CriticalPoint, u64), SimplifiedError> {
+fn critical_point(
+    solver: &LoopSolver,
+    left: (f64, f64),
+    right: (f64, f64),
+) -> Result<(CriticalPoint, u64), SimplifiedError> {
     let mut probe = solver.clone();
     let start = probe.newton_iterations();
     let theta = refine_root(&mut probe, left, right)?;
@@ -156,6 +167,7 @@ fn critical_point(solver: &LoopSolver, left: (f64, f64), right: (f64, f64)) -> R
         energy: at.energy,
         d2energy_dtheta2: d2,
         stable: d2 > 0.0,
+        loop_negative_pivots: at.loop_negative_pivots,
         loop_centerline: probe.centerline(),
     };
     Ok((point, probe.newton_iterations() - start))
@@ -163,7 +175,7 @@ fn critical_point(solver: &LoopSolver, left: (f64, f64), right: (f64, f64)) -> R
 
 /// Ē(θ) on the grid of `spec`, following the loop branch that is planar at theta = 0.
 pub fn landscape(spec: &LandscapeSpec) -> Result<Landscape, SimplifiedError> {
-    if spec.points < 2 || !(spec.theta_max > spec.theta_min) {
+    if spec.points < 2 || spec.theta_max <= spec.theta_min || !spec.theta_max.is_finite() {
         return Err(SimplifiedError::InvalidParameter(
             "a landscape needs at least 2 points and theta_max > theta_min".into(),
         ));

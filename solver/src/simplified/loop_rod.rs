@@ -16,18 +16,20 @@
 //! - Antisymmetry: R maps the braid onto itself (strand A onto strand B) and p_s,
 //!   t_s onto p_f, -t_f, so the whole knot keeps the two-fold symmetry about the
 //!   y axis, which reverses x and z; this is the paper's antisymmetry about the YZ
-//!   plane. At theta = 0 the loop lies in the YZ plane.
-//! - Twist: at theta = 0 each clamp's material director is m1_s = cos(phi) e(T)
-//!   - sin(phi) z (the normal of t_s in the tangent plane of the braid cylinder,
-//!   i.e. in the loop's plane) and m1_f = R m1_s, so the loop at theta = 0 is an
-//!   untwisted planar loop. As theta grows, the start clamp turns by -theta and the
-//!   finish clamp by +theta about z, and `EndTwist` says what the clamp's frame
-//!   does: `Transported` (the default) carries it by parallel transport along the
-//!   path of its tangent (no spin about the tangent; what a DER clamp does when its
-//!   two nodes are turned with the edge twist held, as in Sec. 4), `Clamped`
-//!   turns it rigidly with the braid end (a spin of cos(phi) per radian about the
-//!   tangent more), `Free` leaves the end twist free. Only `Transported` shows the
-//!   paper's sequence of Fig. 13 (c); see `docs/SIMPLIFIED_MODEL.md`.
+//!   plane. At theta = 0 the loop lies in the YZ plane but for the clamps' offsets
+//!   of ±h in x.
+//! - Twist: at theta = 0 each clamp's material director is
+//!   m1_s = cos(phi) e(T) - sin(phi) z, the normal of t_s in the tangent plane of
+//!   the braid cylinder (the loop's plane), and m1_f = R m1_s, so the loop at
+//!   theta = 0 is untwisted but for the clamps' offsets. As theta grows, the start
+//!   clamp turns by -theta and the finish clamp by +theta about z, and `EndTwist`
+//!   says what the clamp's frame does: `Transported` (the default) carries it by
+//!   parallel transport along the path of its tangent (no spin about the tangent;
+//!   what a DER clamp does when its two nodes are turned with the edge twist
+//!   held, as in Sec. 4), `Clamped` turns it rigidly with the braid end (a spin
+//!   of cos(phi) per radian about the tangent more), `Free` leaves the end twist
+//!   free. Only `Transported` shows the paper's sequence of Fig. 13 (c); see
+//!   `docs/SIMPLIFIED_MODEL.md`.
 //! - Each clamp holds the loop's end edge (two nodes and the edge twist, as in
 //!   paper Sec. 4) centred on the braid end, so the rod between the two clamp
 //!   points (edge midpoints) has length exactly l̄_l: K - 2 edges of length
@@ -84,8 +86,12 @@ pub struct EndFrame {
     pub tangent: Vector3<f64>,
     /// Material director m1 of the clamp (normal to the tangent).
     pub director: Vector3<f64>,
-    /// Angular velocity of the clamp per unit increase of theta.
-    pub spin: Vector3<f64>,
+    /// Rate at which the clamp turns about z per unit increase of theta (-1 at the
+    /// start, +1 at the finish).
+    pub turn_rate: f64,
+    /// Rate at which the clamp's frame spins about its tangent, relative to
+    /// parallel transport, per unit increase of theta.
+    pub twist_rate: f64,
 }
 
 /// Boundary conditions of the loop: where it leaves the braid (start, strand A at
@@ -114,24 +120,27 @@ impl LoopBoundary {
         let rigid = azimuth * cp - z * sp;
         // Parallel transport along the tangent's circle about z differs from the
         // rigid turn by a spin of cos(phi) per radian about the tangent.
-        let (director, spin) = match twist {
-            EndTwist::Clamped => (rigid, -z),
+        let (director, twist_rate) = match twist {
+            EndTwist::Clamped => (rigid, -cp),
             EndTwist::Transported | EndTwist::Free => {
                 let (ss, cs) = (theta * cp).sin_cos();
-                (rigid * cs + tangent.cross(&rigid) * ss, -z + tangent * cp)
+                (rigid * cs + tangent.cross(&rigid) * ss, 0.0)
             }
         };
         let start = EndFrame {
             position: Vector3::new(c, s, 0.5 * l_b_bar),
             tangent,
             director,
-            spin,
+            turn_rate: -1.0,
+            twist_rate,
         };
+        // R conjugates a turn about z into the opposite turn.
         let finish = EndFrame {
             position: half_turn_y(&start.position),
             tangent: -half_turn_y(&start.tangent),
             director: half_turn_y(&start.director),
-            spin: half_turn_y(&start.spin),
+            turn_rate: 1.0,
+            twist_rate: -twist_rate,
         };
         Self { start, finish }
     }
@@ -189,7 +198,13 @@ impl LoopSolver {
         let edge = params.l_l_bar(l_k_bar) / (k - 2) as f64;
         let straight: Vec<Vector3<f64>> = (0..k).map(|i| Vector3::x() * (i as f64 * edge * h)).collect();
         let mut rod = Rod::new(&straight, h, params.material)?;
-        let bc = LoopBoundary::new(params.n, params.phi, 0.0, params.l_b_bar(l_k_bar), params.end_twist);
+        let bc = LoopBoundary::new(
+            params.n,
+            params.phi,
+            0.0,
+            params.l_b_bar(l_k_bar),
+            params.end_twist,
+        );
         for (i, x) in planar_loop(&bc, k, edge).iter().enumerate() {
             rod.set_node(i, x * h);
         }
@@ -261,12 +276,20 @@ impl LoopSolver {
     }
 
     /// Follows the branch to (`theta`, `l_k_bar`) in substeps of at most 0.1 rad and
-    /// 2 % in l̄_k, halving a substep whose Newton solve fails.
+    /// 2 % in l̄_k, halving a substep whose Newton solve fails or whose solution
+    /// lands farther from its prediction than one loop length per radian (a jump to
+    /// another branch); fails after 10 halvings.
     pub fn move_to(&mut self, theta: f64, l_k_bar: f64) -> Result<(), SimplifiedError> {
         self.params.check_state(theta, l_k_bar)?;
+        if theta == self.theta && l_k_bar == self.l_k_bar {
+            return Ok(());
+        }
         let dtheta = theta - self.theta;
         let dlog = (l_k_bar / self.l_k_bar).ln();
-        let steps = (dtheta.abs() / MAX_DTHETA).max(dlog.abs() / MAX_DLOG_LK).ceil().max(1.0);
+        let steps = (dtheta.abs() / MAX_DTHETA)
+            .max(dlog.abs() / MAX_DLOG_LK)
+            .ceil()
+            .max(1.0);
         let mut pieces = steps as u64;
         let (theta0, log0) = (self.theta, self.l_k_bar.ln());
         let mut done = 0u64;
@@ -313,7 +336,7 @@ impl LoopSolver {
             .filter(|&j| j % 4 != 3 && !self.rod.fixed[j])
             .fold(0.0f64, |m, j| m.max((self.rod.q[j] - predicted[j]).abs() / h));
         let reach = JUMP_RATE
-            * ((theta - here.theta).abs() + (l_k_bar / here.l_k_bar).ln().abs())
+            * ((theta - here.theta).abs() + (l_k_bar / here.l_k_bar).ln().abs()).max(1e-6)
             * self.params.l_l_bar(l_k_bar);
         if moved > reach {
             return Err(SimplifiedError::Stalled {
@@ -343,7 +366,12 @@ impl LoopSolver {
     /// Rescales the rod's rest state and configuration by `f` (a change of l̄_k).
     fn scale_loop(&mut self, f: f64) {
         let rod = &mut self.rod;
-        for v in rod.rest_len.iter_mut().chain(rod.voronoi.iter_mut()).chain(rod.mass.iter_mut()) {
+        for v in rod
+            .rest_len
+            .iter_mut()
+            .chain(rod.voronoi.iter_mut())
+            .chain(rod.mass.iter_mut())
+        {
             *v *= f;
         }
         for j in 0..rod.ndof() {
@@ -383,8 +411,14 @@ impl LoopSolver {
     fn predict(&mut self, here: &Snapshot) {
         let mut ratio = 0.0;
         if let Some(prev) = &self.previous {
-            let a = (here.theta - prev.theta, (here.l_k_bar - prev.l_k_bar) / LK_PER_RADIAN);
-            let b = (self.theta - here.theta, (self.l_k_bar - here.l_k_bar) / LK_PER_RADIAN);
+            let a = (
+                here.theta - prev.theta,
+                (here.l_k_bar - prev.l_k_bar) / LK_PER_RADIAN,
+            );
+            let b = (
+                self.theta - here.theta,
+                (self.l_k_bar - here.l_k_bar) / LK_PER_RADIAN,
+            );
             let aa = a.0 * a.0 + a.1 * a.1;
             let bb = b.0 * b.0 + b.1 * b.1;
             if aa > 0.0 && aa < 0.25 && bb < 4.0 * aa {
@@ -425,22 +459,29 @@ impl LoopSolver {
     /// Energies, dĒ_l/dθ and stability of the current equilibrium.
     ///
     /// dĒ_l/dθ uses the envelope theorem: at equilibrium only the clamped DOFs
-    /// contribute, dE/dθ = Σ_clamps [Σ_nodes g_x · (w × x) + g_th (w · t)], with w
-    /// the clamp's angular velocity per unit theta (the reaction moments about z;
-    /// the frames are rebased, so twist angles vary by the spin about the tangent).
+    /// contribute, dE/dθ = Σ_clamps [Σ_nodes g_x · (w z × x) + g_th s], with w the
+    /// clamp's turn rate about z and s its twist rate (the reaction moments; the
+    /// frames are rebased, so a twist angle varies by the spin about the tangent).
     pub fn equilibrium(&mut self) -> LoopEquilibrium {
         let rod = &self.rod;
         let e = energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
         let scale = rod.section.radius / rod.section.ei;
-        let bc = LoopBoundary::new(self.params.n, self.params.phi, self.theta, 0.0, self.params.end_twist);
+        let bc = LoopBoundary::new(
+            self.params.n,
+            self.params.phi,
+            self.theta,
+            0.0,
+            self.params.end_twist,
+        );
         let k = rod.nodes();
         let mut de = 0.0;
-        for (nodes, edge, w) in [([0, 1], 0, bc.start.spin), ([k - 2, k - 1], k - 2, bc.finish.spin)] {
+        for (nodes, edge, end) in [([0, 1], 0, bc.start), ([k - 2, k - 1], k - 2, bc.finish)] {
+            let w = Vector3::z() * end.turn_rate;
             for a in nodes {
                 let g = Vector3::from_column_slice(&self.grad[node_dof(a)..node_dof(a) + 3]);
                 de += g.dot(&w.cross(&rod.node(a)));
             }
-            de += self.grad[theta_dof(edge)] * w.dot(&rod.geo.tangent[edge]);
+            de += self.grad[theta_dof(edge)] * end.twist_rate;
         }
         for j in 0..rod.ndof() {
             if rod.fixed[j] {
@@ -523,7 +564,10 @@ fn set_untwisted_frames(rod: &mut Rod, bc: &LoopBoundary) {
             u = parallel_transport(&u, &rod.geo.tangent[i - 1], &t);
             u = (u - t * t.dot(&u)).normalize();
             // Zero twist: th_i - th_{i-1} + reference twist = 0 (eq. 5), not just mod 2 pi.
-            unwrap_near(signed_angle(&rod.geo.d1[i], &u, &t), angles[i - 1] - rod.geo.ref_twist[i])
+            unwrap_near(
+                signed_angle(&rod.geo.d1[i], &u, &t),
+                angles[i - 1] - rod.geo.ref_twist[i],
+            )
         };
         angles.push(raw);
     }
@@ -534,4 +578,102 @@ fn set_untwisted_frames(rod: &mut Rod, bc: &LoopBoundary) {
         rod.set_theta(i, a + mismatch * i as f64 / last as f64);
     }
     rod.rebase_frames();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simplified::braid::{Braid, Strand};
+
+    const PHI: f64 = PI / 3.0;
+
+    #[test]
+    fn clamps_sit_on_the_braid_ends_with_the_tilted_helix_tangent() {
+        for n in [2, 3] {
+            for theta in [0.0, 0.7, 2.9] {
+                let braid = Braid {
+                    n,
+                    theta,
+                    l_b_bar: 56.6,
+                };
+                let bc = LoopBoundary::new(n, PHI, theta, braid.l_b_bar, EndTwist::Transported);
+                let t = braid.half_span();
+                assert!((bc.start.position - braid.point(Strand::A, t)).norm() < 1e-12);
+                assert!((bc.finish.position - braid.point(Strand::B, -t)).norm() < 1e-12);
+                for (e, helix) in [
+                    (&bc.start, braid.tangent(Strand::A, t)),
+                    (&bc.finish, braid.tangent(Strand::B, -t)),
+                ] {
+                    // Same azimuthal direction as the strand, pitch angle phi from the axis.
+                    assert!((e.tangent.z - PHI.cos()).abs() < 1e-12);
+                    let (a, b) = (
+                        Vector3::new(e.tangent.x, e.tangent.y, 0.0),
+                        Vector3::new(helix.x, helix.y, 0.0),
+                    );
+                    assert!((a.normalize() - b.normalize()).norm() < 1e-12);
+                    assert!(e.director.dot(&e.tangent).abs() < 1e-12);
+                    assert!((e.director.norm() - 1.0).abs() < 1e-12);
+                }
+                // Two-fold symmetry about y: x and z reversed, the loop's direction too.
+                let r = |v: Vector3<f64>| Vector3::new(-v.x, v.y, -v.z);
+                assert!((bc.finish.position - r(bc.start.position)).norm() < 1e-12);
+                assert!((bc.finish.tangent + r(bc.start.tangent)).norm() < 1e-12);
+                assert!((bc.finish.director - r(bc.start.director)).norm() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn transported_director_is_the_parallel_transport_along_the_tangent_path() {
+        // Integrate parallel transport along the circle swept by the start tangent.
+        let steps = 20000;
+        let theta = 2.5;
+        let mut u = LoopBoundary::new(3, PHI, 0.0, 50.0, EndTwist::Transported)
+            .start
+            .director;
+        let mut t_prev = LoopBoundary::new(3, PHI, 0.0, 50.0, EndTwist::Transported)
+            .start
+            .tangent;
+        for i in 1..=steps {
+            let t = LoopBoundary::new(
+                3,
+                PHI,
+                theta * i as f64 / steps as f64,
+                50.0,
+                EndTwist::Transported,
+            )
+            .start
+            .tangent;
+            u = parallel_transport(&u, &t_prev, &t);
+            t_prev = t;
+        }
+        let bc = LoopBoundary::new(3, PHI, theta, 50.0, EndTwist::Transported);
+        assert!(
+            (u - bc.start.director).norm() < 1e-6,
+            "transported {u:?} vs {:?}",
+            bc.start.director
+        );
+        // The rigid convention differs from it by the spin theta cos(phi) about the tangent.
+        let rigid = LoopBoundary::new(3, PHI, theta, 50.0, EndTwist::Clamped).start;
+        let angle = signed_angle(&rigid.director, &bc.start.director, &rigid.tangent);
+        assert!((angle - theta * PHI.cos()).abs() < 1e-12);
+        assert!((rigid.twist_rate + PHI.cos()).abs() < 1e-15 && bc.start.twist_rate == 0.0);
+    }
+
+    #[test]
+    fn planar_start_closes_exactly_with_the_clamps() {
+        let bc = LoopBoundary::new(3, PHI, 0.0, 56.6, EndTwist::Transported);
+        let k = 41;
+        let edge = 80.9 / (k - 2) as f64;
+        let nodes = planar_loop(&bc, k, edge);
+        assert!((nodes[0] - (bc.start.position - bc.start.tangent * (0.5 * edge))).norm() < 1e-12);
+        let end = bc.finish.position + bc.finish.tangent * (0.5 * edge);
+        assert!(
+            (nodes[k - 1] - end).norm() < 1e-9 * edge,
+            "closure {:e}",
+            (nodes[k - 1] - end).norm()
+        );
+        assert!(((nodes[1] - nodes[0]).normalize() - bc.start.tangent).norm() < 1e-12);
+        assert!(((nodes[k - 1] - nodes[k - 2]).normalize() - bc.finish.tangent).norm() < 1e-12);
+    }
 }

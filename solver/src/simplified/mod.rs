@@ -10,13 +10,18 @@
 //! Units: lengths in rod radii h, energies in EI/h (eq. 12). The reconstruction of
 //! the loop's boundary conditions (Fig. 12 is not in the text) is documented in
 //! `loop_rod` and in `docs/SIMPLIFIED_MODEL.md`.
+pub mod bifurcation;
 pub mod braid;
 pub mod landscape;
 pub mod loop_rod;
+pub mod reproduce;
+pub mod svg;
 
+pub use bifurcation::{Bifurcation, BifurcationSpec, BranchPoint, Fold, bifurcation};
 pub use braid::{Braid, Strand};
 pub use landscape::{CriticalPoint, Landscape, LandscapePoint, LandscapeSpec, landscape};
 pub use loop_rod::{EndTwist, LoopBoundary, LoopEquilibrium, LoopSolver};
+pub use reproduce::{Document, Figure, Reproduction, ReproductionSpec, reproduce};
 
 use crate::material::Material;
 use crate::rod::RodError;
@@ -37,7 +42,7 @@ pub struct Params {
     /// Tilt phi of the loop's end tangents away from the braid axis (rad).
     pub phi: f64,
     /// Rod radius h (m). The model is scale-free, so results depend on h only
-    /// through round-off (paper Fig. 14).
+    /// through the solver tolerance (paper Fig. 14).
     pub radius: f64,
     /// Nodes K of the DER loop.
     pub loop_nodes: usize,
@@ -55,7 +60,7 @@ impl Default for Params {
             phi: PI / 3.0,
             radius: 1.6e-3,
             loop_nodes: 81,
-            end_twist: EndTwist::Clamped,
+            end_twist: EndTwist::Transported,
             material: Material::default(),
         }
     }
@@ -90,7 +95,7 @@ impl Params {
         if !(self.epsilon > 0.0 && self.epsilon < 1.0) {
             return bad("epsilon must lie in (0, 1): the loop must be longer than the braid");
         }
-        if !(self.phi.abs() > 0.0 && self.phi.abs() < PI / 2.0) {
+        if !(self.phi > 0.0 && self.phi < PI / 2.0) {
             return bad("phi must lie in (0, pi/2)");
         }
         if !(self.radius > 0.0 && self.radius.is_finite()) {
@@ -105,7 +110,9 @@ impl Params {
     /// Checks a closed-loop length and rotation angle against these parameters.
     pub fn check_state(&self, theta: f64, l_k_bar: f64) -> Result<(), SimplifiedError> {
         if !(l_k_bar.is_finite() && l_k_bar > 0.0) {
-            return Err(SimplifiedError::InvalidParameter(format!("l_k_bar = {l_k_bar} must be positive")));
+            return Err(SimplifiedError::InvalidParameter(format!(
+                "l_k_bar = {l_k_bar} must be positive"
+            )));
         }
         if !(theta.is_finite() && theta < f64::from(self.n) * PI) {
             return Err(SimplifiedError::InvalidParameter(format!(
@@ -132,5 +139,9 @@ pub enum SimplifiedError {
         source: StepError,
     },
     #[error("continuation stalled at theta = {theta}, l_k_bar = {l_k_bar}: {reason}")]
-    Stalled { theta: f64, l_k_bar: f64, reason: String },
+    Stalled {
+        theta: f64,
+        l_k_bar: f64,
+        reason: String,
+    },
 }

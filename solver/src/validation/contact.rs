@@ -10,7 +10,9 @@ use nalgebra::Vector3;
 use std::f64::consts::PI;
 
 fn polyline(a: Vector3<f64>, b: Vector3<f64>, k: usize) -> Vec<Vector3<f64>> {
-    (0..k).map(|i| a + (b - a) * (i as f64 / (k - 1) as f64)).collect()
+    (0..k)
+        .map(|i| a + (b - a) * (i as f64 / (k - 1) as f64))
+        .collect()
 }
 
 fn fixed_rod(a: Vector3<f64>, b: Vector3<f64>, k: usize, radius: f64) -> Rod {
@@ -39,11 +41,19 @@ fn total_energy(world: &World) -> f64 {
 pub fn crossing_rods_pressed() -> Result<(f64, f64, bool), WorldError> {
     let h = 1e-3;
     let k = 21;
-    let mut lower = Rod::new(&polyline(Vector3::new(-0.05, 0.0, 0.0), Vector3::new(0.05, 0.0, 0.0), k), h, Material::default())
-        .expect("valid rod");
+    let mut lower = Rod::new(
+        &polyline(Vector3::new(-0.05, 0.0, 0.0), Vector3::new(0.05, 0.0, 0.0), k),
+        h,
+        Material::default(),
+    )
+    .expect("valid rod");
     let z = 2.0 * h + 0.2 * h;
-    let mut upper = Rod::new(&polyline(Vector3::new(0.0, -0.05, z), Vector3::new(0.0, 0.05, z), k), h, Material::default())
-        .expect("valid rod");
+    let mut upper = Rod::new(
+        &polyline(Vector3::new(0.0, -0.05, z), Vector3::new(0.0, 0.05, z), k),
+        h,
+        Material::default(),
+    )
+    .expect("valid rod");
     for rod in [&mut lower, &mut upper] {
         rod.clamp(End::Start);
         rod.clamp(End::Finish);
@@ -90,7 +100,11 @@ pub fn inclined_rod(alpha: f64, mu: f64) -> Result<(f64, f64), WorldError> {
     let fixed = fixed_rod(-axis * 0.3, axis * 0.1, 41, h);
     let centre = normal * (2.0 * h);
     let short = Rod::new(
-        &polyline(centre - Vector3::new(0.0, 0.01, 0.0), centre + Vector3::new(0.0, 0.01, 0.0), 4),
+        &polyline(
+            centre - Vector3::new(0.0, 0.01, 0.0),
+            centre + Vector3::new(0.0, 0.01, 0.0),
+            4,
+        ),
         h,
         Material::default(),
     )
@@ -222,7 +236,11 @@ pub fn frictionless_bounce() -> Result<(f64, f64), WorldError> {
     let h = 1e-3;
     let fixed = fixed_rod(Vector3::new(-0.05, 0.0, 0.0), Vector3::new(0.05, 0.0, 0.0), 21, h);
     let mut ball = Rod::new(
-        &polyline(Vector3::new(0.0, -0.025, 0.004), Vector3::new(0.0, 0.025, 0.004), 11),
+        &polyline(
+            Vector3::new(0.0, -0.025, 0.004),
+            Vector3::new(0.0, 0.025, 0.004),
+            11,
+        ),
         h,
         Material::default(),
     )
@@ -236,7 +254,12 @@ pub fn frictionless_bounce() -> Result<(f64, f64), WorldError> {
         friction: 0.0,
         ..ContactOptions::default()
     };
-    let mut world = World::new(vec![fixed, ball], Environment::default(), contact, NewtonOptions::default());
+    let mut world = World::new(
+        vec![fixed, ball],
+        Environment::default(),
+        contact,
+        NewtonOptions::default(),
+    );
     let e0 = total_energy(&world);
     let mut worst: f64 = 0.0;
     let mut contacted = false;
@@ -256,16 +279,29 @@ pub fn frictionless_bounce() -> Result<(f64, f64), WorldError> {
 pub fn interpenetration_recovery() -> Result<(f64, f64), WorldError> {
     let h = 1e-3;
     let k = 21;
-    let a = Rod::new(&polyline(Vector3::new(-0.05, 0.0, 0.0), Vector3::new(0.05, 0.0, 0.0), k), h, Material::default())
-        .expect("valid rod");
+    let a = Rod::new(
+        &polyline(Vector3::new(-0.05, 0.0, 0.0), Vector3::new(0.05, 0.0, 0.0), k),
+        h,
+        Material::default(),
+    )
+    .expect("valid rod");
     let z = 2.0 * h - 0.2 * h;
-    let b = Rod::new(&polyline(Vector3::new(0.0, -0.05, z), Vector3::new(0.0, 0.05, z), k), h, Material::default())
-        .expect("valid rod");
+    let b = Rod::new(
+        &polyline(Vector3::new(0.0, -0.05, z), Vector3::new(0.0, 0.05, z), k),
+        h,
+        Material::default(),
+    )
+    .expect("valid rod");
     let env = Environment {
         gravity: Vector3::zeros(),
         damping: 0.0,
     };
-    let mut world = World::new(vec![a, b], env, ContactOptions::default(), NewtonOptions::default());
+    let mut world = World::new(
+        vec![a, b],
+        env,
+        ContactOptions::default(),
+        NewtonOptions::default(),
+    );
     let mut fastest: f64 = 0.0;
     for _ in 0..50 {
         world.step(1e-3)?;
@@ -296,7 +332,13 @@ pub fn broad_phase_vs_brute_force() -> (usize, usize, usize) {
     let segments: Vec<Segment> = points
         .windows(2)
         .enumerate()
-        .map(|(index, w)| Segment { a: w[0], b: w[1], radius: h, body: 0, index })
+        .map(|(index, w)| Segment {
+            a: w[0],
+            b: w[1],
+            radius: h,
+            body: 0,
+            index,
+        })
         .collect();
     let edge = (points[1] - points[0]).norm();
     let gaps = [neighbour_gap(2.0 * h, edge)];

@@ -46,7 +46,7 @@ pub fn gradient_error(rod: &mut Rod, terms: Terms) -> f64 {
     energies::evaluate(rod, terms, &mut g, None);
     let mut num = 0.0;
     let mut den = 0.0;
-    for j in 0..n {
+    for (j, gj) in g.iter().enumerate() {
         let h = 1e-6;
         let q0 = rod.q[j];
         rod.q[j] = q0 + h;
@@ -57,8 +57,8 @@ pub fn gradient_error(rod: &mut Rod, terms: Terms) -> f64 {
         let em = energies::evaluate(rod, terms, &mut scratch, None).total();
         rod.q[j] = q0;
         let fd = (ep - em) / (2.0 * h);
-        num += (g[j] - fd).powi(2);
-        den += g[j].powi(2);
+        num += (gj - fd).powi(2);
+        den += gj.powi(2);
     }
     rod.update_geometry();
     (num / den).sqrt()

@@ -41,7 +41,12 @@ pub fn twisted_rod(phi: f64) -> Result<(f64, f64, f64, f64), StepError> {
     let gj = rod.section.gj;
     let (_, torque) = stepper.clamp_reaction(&rod, End::Finish);
     debug_assert_eq!(rod.clamp_dofs(End::Finish)[6], theta_dof(last));
-    Ok((report.energies.twisting, gj * phi * phi / (2.0 * free), torque, gj * phi / free))
+    Ok((
+        report.energies.twisting,
+        gj * phi * phi / (2.0 * free),
+        torque,
+        gj * phi / free,
+    ))
 }
 
 /// Clamped-clamped column under slow end shortening: returns (measured critical

@@ -1,0 +1,417 @@
+//! HTTP adapters over [`Core`]: extract, call, serialise. Routes:
+//!
+//! | route | what |
+//! | --- | --- |
+//! | `GET /` | a minimal status page |
+//! | `GET /healthz` | health (503 when degraded) |
+//! | `GET /metrics` | Prometheus text |
+//! | `GET /api/openapi.json`, `GET /api/docs` | OpenAPI document, Swagger UI (embedded, offline) |
+//! | `GET /api/presets` | the presets with their full definitions |
+//! | `POST /api/sweeps` | submit (`Idempotency-Key` header honoured) |
+//! | `GET /api/sweeps`, `GET /api/sweeps/{id}` | list, detail (counts, progress, ETA) |
+//! | `POST /api/sweeps/{id}/pause`, `/resume`, `/cancel` | control |
+//! | `GET /api/sweeps/{id}/events` | server-sent progress events |
+//! | `GET /api/sweeps/{id}/phase-diagram` | inversion points of the sweep's cases |
+//! | `GET /api/cases/{id}`, `/series.csv`, `/frames` | a case, its series as CSV, its frames |
+//!
+//! Limits: request bodies of at most [`Limits::max_body_bytes`] (413 beyond),
+//! at most [`Limits::max_cases`] cases per sweep (422 beyond). With a token
+//! configured (`KNOTSWEEP_TOKEN`), every request other than GET/HEAD/OPTIONS
+//! needs `Authorization: Bearer <token>` (401 otherwise).
+use crate::core::{self, Core};
+use crate::error::{ApiError, ErrorBody};
+use crate::spec::{FieldError, Limits, Preset, SweepSpec};
+use crate::views::*;
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{DefaultBodyLimit, FromRequestParts, Path, Request, State};
+use axum::http::request::Parts;
+use axum::http::{HeaderMap, HeaderValue, Method, StatusCode, header};
+use axum::middleware::Next;
+use axum::response::sse::{Event, KeepAlive, Sse};
+use axum::response::{Html, IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::{Json, Router};
+use futures_util::Stream;
+use std::convert::Infallible;
+use std::time::Duration;
+use tokio::sync::watch;
+use utoipa::openapi::security::{HttpAuthScheme, HttpBuilder, SecurityScheme};
+use utoipa::openapi::{OpenApi as OpenApiDoc, RefOr};
+use utoipa::{Modify, OpenApi};
+use utoipa_swagger_ui::SwaggerUi;
+
+/// Shared state of the handlers.
+#[derive(Clone)]
+pub struct App {
+    pub core: Core,
+    /// Bearer token required for mutating requests.
+    pub token: Option<String>,
+    /// Flips to true at shutdown (ends the event streams).
+    pub shutdown: watch::Receiver<bool>,
+    /// Interval of the event streams' polls.
+    pub events_interval: Duration,
+}
+
+/// The router with every route, the auth layer and the body limit.
+pub fn router(app: App) -> Router {
+    let limits: Limits = *app.core.limits();
+    let api = Router::new()
+        .route("/", get(index))
+        .route("/healthz", get(healthz))
+        .route("/metrics", get(metrics))
+        .route("/api/presets", get(list_presets))
+        .route("/api/sweeps", post(submit_sweep).get(list_sweeps))
+        .route("/api/sweeps/{id}", get(get_sweep))
+        .route("/api/sweeps/{id}/pause", post(pause_sweep))
+        .route("/api/sweeps/{id}/resume", post(resume_sweep))
+        .route("/api/sweeps/{id}/cancel", post(cancel_sweep))
+        .route("/api/sweeps/{id}/events", get(sweep_events))
+        .route("/api/sweeps/{id}/phase-diagram", get(phase_diagram))
+        .route("/api/cases/{id}", get(get_case))
+        .route("/api/cases/{id}/series.csv", get(case_series_csv))
+        .route("/api/cases/{id}/frames", get(case_frames))
+        .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
+        .fallback(not_found)
+        .layer(DefaultBodyLimit::max(limits.max_body_bytes))
+        .layer(axum::middleware::from_fn_with_state(app.clone(), auth))
+        .layer(tower_http::trace::TraceLayer::new_for_http());
+    api.with_state(app)
+}
+
+/// The OpenAPI document.
+pub fn openapi() -> OpenApiDoc {
+    ApiDoc::openapi()
+}
+
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "knotsweep",
+        description = "Sweeps of overhand-knot tightening simulations (\"Snap buckling of overhand knots\"): \
+            submit a base case and a grid (or a preset reproducing the paper's Figs 7, 9, 11), follow the \
+            progress and download the phase diagram (inversion point per case). \n\n\
+            Limits: request bodies of at most 64 KiB by default (413), at most 1000 cases per sweep by default \
+            (422), parameter ranges as documented on CaseParams (422 with the field and reason). With \
+            KNOTSWEEP_TOKEN set on the server, POST requests need `Authorization: Bearer <token>` (401)."
+    ),
+    paths(
+        submit_sweep, list_sweeps, get_sweep, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
+        phase_diagram, get_case, case_series_csv, case_frames, list_presets, healthz, metrics
+    ),
+    components(schemas(
+        SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
+        SubmitResponse, PhaseDiagram, PhasePoint, InversionPoint, CaseProgress, CaseDetail, ResultView,
+        LogLineView, Health, SweepEvent, RunningCase
+    )),
+    modifiers(&Extras),
+    tags(
+        (name = "sweeps", description = "Submit and follow sweeps"),
+        (name = "cases", description = "Cases and their results"),
+        (name = "service", description = "Health, metrics, presets")
+    )
+)]
+struct ApiDoc;
+
+struct Extras;
+
+impl Modify for Extras {
+    fn modify(&self, openapi: &mut OpenApiDoc) {
+        let components = openapi.components.get_or_insert_with(Default::default);
+        components.schemas.insert(
+            "CaseParams".to_string(),
+            RefOr::T(crate::openapi::case_params_schema()),
+        );
+        components.add_security_scheme(
+            "bearer",
+            SecurityScheme::Http(HttpBuilder::new().scheme(HttpAuthScheme::Bearer).build()),
+        );
+    }
+}
+
+/// A numeric path id; anything else is a 400 naming the field.
+pub struct Id(pub i64);
+
+impl<S: Send + Sync> FromRequestParts<S> for Id {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, Self::Rejection> {
+        match Path::<i64>::from_request_parts(parts, state).await {
+            Ok(Path(id)) => Ok(Id(id)),
+            Err(e) => Err(ApiError::bad_request(
+                "id",
+                format!("must be an integer ({})", e.body_text()),
+            )),
+        }
+    }
+}
+
+fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+async fn auth(State(app): State<App>, request: Request, next: Next) -> Response {
+    if let Some(token) = &app.token
+        && !matches!(*request.method(), Method::GET | Method::HEAD | Method::OPTIONS)
+    {
+        let given = request
+            .headers()
+            .get(header::AUTHORIZATION)
+            .and_then(|v| v.to_str().ok())
+            .and_then(|v| v.strip_prefix("Bearer "))
+            .map(str::trim);
+        if !given.is_some_and(|t| constant_time_eq(t.as_bytes(), token.as_bytes())) {
+            return ApiError::unauthorized().into_response();
+        }
+    }
+    next.run(request).await
+}
+
+async fn not_found() -> ApiError {
+    ApiError::new(StatusCode::NOT_FOUND, "not_found", "no such route", vec![])
+}
+
+async fn index() -> Html<&'static str> {
+    Html(include_str!("../../web/index.html"))
+}
+
+/// Health: database reachable and no embedded worker stalled.
+#[utoipa::path(get, path = "/healthz", tag = "service",
+    responses((status = 200, body = Health), (status = 503, description = "Degraded", body = Health)))]
+async fn healthz(State(app): State<App>) -> (StatusCode, Json<Health>) {
+    let health = app.core.health().await;
+    let status = if health.status == "ok" {
+        StatusCode::OK
+    } else {
+        StatusCode::SERVICE_UNAVAILABLE
+    };
+    (status, Json(health))
+}
+
+/// Prometheus metrics: `knotsweep_cases{status}`, `knotsweep_queue_depth`,
+/// `knotsweep_sweeps{state}`, `knotsweep_claims_total`,
+/// `knotsweep_completions_total{outcome}`, `knotsweep_case_duration_seconds`
+/// (histogram), retries, failures, lost leases, queue overhead.
+#[utoipa::path(get, path = "/metrics", tag = "service",
+    responses((status = 200, description = "Prometheus text exposition", content_type = "text/plain")))]
+async fn metrics(State(app): State<App>) -> Result<Response, ApiError> {
+    let text = app.core.metrics().await?;
+    Ok((
+        [(header::CONTENT_TYPE, "text/plain; version=0.0.4; charset=utf-8")],
+        text,
+    )
+        .into_response())
+}
+
+/// The presets (paper Figs 7, 9, 11) with their full definitions.
+#[utoipa::path(get, path = "/api/presets", tag = "service", responses((status = 200, body = Vec<Preset>)))]
+async fn list_presets() -> Json<Vec<Preset>> {
+    Json(crate::spec::presets())
+}
+
+/// Submit a sweep: a base case plus a grid, or a preset.
+///
+/// Every case parameter is optional (paper defaults); `grid` lists values for
+/// any parameters (cartesian product, at most 1000 cases by default). A case
+/// already computed (same parameters and solver version) is reused at once
+/// (`cached: true`). With an `Idempotency-Key` seen before and the same body,
+/// the first sweep is returned (200, `replayed: true`); with a different body,
+/// 409.
+#[utoipa::path(post, path = "/api/sweeps", tag = "sweeps",
+    request_body(content = SweepSpec, description = "At most 64 KiB (default limit)"),
+    params(("Idempotency-Key" = Option<String>, Header, description = "Makes retried submissions return the first sweep (1-200 printable ASCII characters)")),
+    responses(
+        (status = 201, description = "Accepted", body = SubmitResponse),
+        (status = 200, description = "Idempotent replay of an earlier submission", body = SubmitResponse),
+        (status = 400, description = "Malformed JSON or header", body = ErrorBody),
+        (status = 401, description = "Token required", body = ErrorBody),
+        (status = 409, description = "Idempotency-Key reused with another body", body = ErrorBody),
+        (status = 413, description = "Body too large", body = ErrorBody),
+        (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
+    ),
+    security((), ("bearer" = [])))]
+async fn submit_sweep(
+    State(app): State<App>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let limit = app.core.limits().max_body_bytes;
+    let body = body.map_err(|e| {
+        let status = e.status();
+        let kind = if status == StatusCode::PAYLOAD_TOO_LARGE {
+            "payload_too_large"
+        } else {
+            "bad_request"
+        };
+        let reason = format!("{} (limit {limit} bytes)", e.body_text());
+        ApiError::new(
+            status,
+            kind,
+            reason.clone(),
+            vec![FieldError::new("body", reason)],
+        )
+    })?;
+    let key = match headers.get("idempotency-key") {
+        None => None,
+        Some(v) => Some(
+            v.to_str()
+                .map_err(|_| ApiError::bad_request("Idempotency-Key", "must be printable ASCII"))?,
+        ),
+    };
+    let (spec, raw) = Core::parse_spec(&body)?;
+    let response = app.core.submit(spec, &raw, key).await?;
+    let status = if response.replayed {
+        StatusCode::OK
+    } else {
+        StatusCode::CREATED
+    };
+    let location =
+        HeaderValue::from_str(&format!("/api/sweeps/{}", response.sweep.summary.id)).expect("ascii");
+    Ok((status, [(header::LOCATION, location)], Json(response)).into_response())
+}
+
+/// All sweeps with their counts per status.
+#[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", responses((status = 200, body = Vec<SweepSummary>)))]
+async fn list_sweeps(State(app): State<App>) -> Result<Json<Vec<SweepSummary>>, ApiError> {
+    Ok(Json(app.core.list_sweeps().await?))
+}
+
+/// A sweep: counts per status, per-case progress, ETA.
+#[utoipa::path(get, path = "/api/sweeps/{id}", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = SweepDetail), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+async fn get_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
+    Ok(Json(app.core.sweep(id).await?))
+}
+
+async fn control(app: App, id: i64, name: &str) -> Result<Json<SweepDetail>, ApiError> {
+    let action = core::action(name).expect("route names an action");
+    Ok(Json(app.core.control(id, action).await?))
+}
+
+/// Pause: queued cases are not handed out (running ones finish).
+#[utoipa::path(post, path = "/api/sweeps/{id}/pause", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
+    security((), ("bearer" = [])))]
+async fn pause_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
+    control(app, id, "pause").await
+}
+
+/// Resume a paused sweep.
+#[utoipa::path(post, path = "/api/sweeps/{id}/resume", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody),
+        (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
+    security((), ("bearer" = [])))]
+async fn resume_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
+    control(app, id, "resume").await
+}
+
+/// Cancel: queued cases are cancelled, running ones stop at their next
+/// heartbeat (cases another live sweep also wants go on).
+#[utoipa::path(post, path = "/api/sweeps/{id}/cancel", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody)),
+    security((), ("bearer" = [])))]
+async fn cancel_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
+    control(app, id, "cancel").await
+}
+
+struct EventState {
+    app: App,
+    id: i64,
+    pending: Option<SweepDetail>,
+    last: Option<String>,
+    done: bool,
+}
+
+/// Server-sent events: `progress` (a [`SweepEvent`]) whenever the sweep
+/// changes, then one `done` event when it is finished or cancelled.
+#[utoipa::path(get, path = "/api/sweeps/{id}/events", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, description = "text/event-stream of `progress` and `done` events whose data is a SweepEvent",
+        content_type = "text/event-stream", body = SweepEvent), (status = 404, body = ErrorBody)))]
+async fn sweep_events(
+    State(app): State<App>,
+    Id(id): Id,
+) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
+    let first = app.core.sweep(id).await?;
+    let state = EventState {
+        app,
+        id,
+        pending: Some(first),
+        last: None,
+        done: false,
+    };
+    let stream = futures_util::stream::unfold(state, |mut st| async move {
+        if st.done {
+            return None;
+        }
+        loop {
+            let detail = match st.pending.take() {
+                Some(d) => d,
+                None => {
+                    let mut shutdown = st.app.shutdown.clone();
+                    if *shutdown.borrow() {
+                        return None;
+                    }
+                    tokio::select! {
+                        _ = tokio::time::sleep(st.app.events_interval) => {}
+                        _ = shutdown.changed() => return None,
+                    }
+                    st.app.core.sweep(st.id).await.ok()?
+                }
+            };
+            let event = SweepEvent::from(&detail);
+            let data = serde_json::to_string(&event).expect("event serialises");
+            if matches!(event.status, SweepStatus::Done | SweepStatus::Cancelled) {
+                st.done = true;
+                return Some((Ok(Event::default().event("done").data(data)), st));
+            }
+            if st.last.as_deref() != Some(data.as_str()) {
+                st.last = Some(data.clone());
+                return Some((Ok(Event::default().event("progress").data(data)), st));
+            }
+        }
+    });
+    Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(Duration::from_secs(15))))
+}
+
+/// The phase diagram: for each case its varied parameters, status and
+/// inversion point (l_k bar, l_c/L) or null with the reason. Paper Figs 7, 9
+/// and 11 plot `points[].inversion.l_k_bar` against the varied parameter.
+#[utoipa::path(get, path = "/api/sweeps/{id}/phase-diagram", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = PhaseDiagram), (status = 404, body = ErrorBody)))]
+async fn phase_diagram(State(app): State<App>, Id(id): Id) -> Result<Json<PhaseDiagram>, ApiError> {
+    Ok(Json(app.core.phase_diagram(id).await?))
+}
+
+/// A case: parameters, status, result, series, log lines.
+#[utoipa::path(get, path = "/api/cases/{id}", tag = "cases", params(("id" = i64, Path)),
+    responses((status = 200, body = CaseDetail), (status = 404, body = ErrorBody)))]
+async fn get_case(State(app): State<App>, Id(id): Id) -> Result<Json<CaseDetail>, ApiError> {
+    Ok(Json(app.core.case(id).await?))
+}
+
+/// The series of a case's result as CSV (404 before the result).
+#[utoipa::path(get, path = "/api/cases/{id}/series.csv", tag = "cases", params(("id" = i64, Path)),
+    responses((status = 200, description = "CSV, one row per sample", content_type = "text/csv"),
+        (status = 404, body = ErrorBody)))]
+async fn case_series_csv(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let csv = app.core.series_csv(id).await?;
+    let disposition = format!("attachment; filename=\"case-{id}-series.csv\"");
+    Ok((
+        [
+            (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        csv,
+    )
+        .into_response())
+}
+
+/// Centreline snapshots of a case (`[{label, l_k_bar, points: [[x, y, z], ...]}]`).
+#[utoipa::path(get, path = "/api/cases/{id}/frames", tag = "cases", params(("id" = i64, Path)),
+    responses((status = 200, description = "JSON array of frames", content_type = "application/json"),
+        (status = 404, body = ErrorBody)))]
+async fn case_frames(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let json = app.core.frames(id).await?;
+    Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
+}

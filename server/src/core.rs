@@ -1,0 +1,580 @@
+//! The typed core of the service: every operation of the API (and of
+//! `knotsweep sweep`) as a method over the store. The HTTP handlers in
+//! [`crate::api`] only extract, call one of these and serialise.
+use crate::error::CoreError;
+use crate::spec::{self, FieldError, Limits, SweepSpec};
+use crate::views::*;
+use knotsweep_worker::pool::PoolHandle;
+use knotsweep_worker::store::{
+    CaseRecord, CaseState, CreateOutcome, Idempotency, NewCase, NewSweep, Store, SweepAction, SweepCase,
+    SweepRecord, SweepState,
+};
+use serde_json::Value;
+use solver::measurements::Sample;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Status words of cases, in the order metrics list them.
+pub const STATUS_WORDS: [&str; 9] = [
+    "queued",
+    "running",
+    "completed",
+    "invalid",
+    "diverged",
+    "penetrated",
+    "topology_changed",
+    "failed",
+    "cancelled",
+];
+
+/// The service's operations.
+#[derive(Clone)]
+pub struct Core {
+    store: Arc<dyn Store>,
+    limits: Limits,
+    pool: Option<PoolHandle>,
+    started: Instant,
+}
+
+impl Core {
+    pub fn new(store: Arc<dyn Store>, limits: Limits, pool: Option<PoolHandle>) -> Self {
+        Self {
+            store,
+            limits,
+            pool,
+            started: Instant::now(),
+        }
+    }
+
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    pub fn store(&self) -> &Arc<dyn Store> {
+        &self.store
+    }
+
+    /// Parses a request body into a spec: 400 for malformed JSON, 422 with the
+    /// field for unknown fields and wrong types. Returns the spec and the
+    /// parsed body (for the idempotency hash).
+    pub fn parse_spec(body: &[u8]) -> Result<(SweepSpec, Value), CoreError> {
+        if body.iter().all(u8::is_ascii_whitespace) {
+            return Err(CoreError::BadRequest(
+                "body".to_string(),
+                "empty body: send a JSON object ({} is one case at the paper's defaults)".to_string(),
+            ));
+        }
+        let value: Value = serde_json::from_slice(body)
+            .map_err(|e| CoreError::BadRequest("body".to_string(), format!("malformed JSON: {e}")))?;
+        if !value.is_object() {
+            return Err(CoreError::Invalid(vec![FieldError::new(
+                "body",
+                "must be a JSON object",
+            )]));
+        }
+        let spec: SweepSpec = serde_path_to_error::deserialize(value.clone()).map_err(|e| {
+            let path = e.path().to_string();
+            let text = e.inner().to_string();
+            let field = match text
+                .strip_prefix("unknown field `")
+                .and_then(|r| r.split_once('`'))
+            {
+                Some((name, _)) if path == "." || path == name || path.ends_with(&format!(".{name}")) => {
+                    if path == "." {
+                        name.to_string()
+                    } else {
+                        path
+                    }
+                }
+                Some((name, _)) => format!("{path}.{name}"),
+                None => path,
+            };
+            CoreError::Invalid(vec![FieldError::new(field, text)])
+        })?;
+        Ok((spec, value))
+    }
+
+    /// Validates, expands and enqueues a sweep. With an idempotency key seen
+    /// before (same body), the first sweep is returned with `replayed: true`.
+    pub async fn submit(
+        &self,
+        spec: SweepSpec,
+        raw: &Value,
+        idempotency_key: Option<&str>,
+    ) -> Result<SubmitResponse, CoreError> {
+        if let Some(key) = idempotency_key {
+            if key.is_empty() || key.chars().count() > self.limits.max_idempotency_key_len {
+                return Err(CoreError::BadRequest(
+                    "Idempotency-Key".to_string(),
+                    format!(
+                        "must have 1 to {} characters",
+                        self.limits.max_idempotency_key_len
+                    ),
+                ));
+            }
+            if !key.chars().all(|c| c.is_ascii_graphic()) {
+                return Err(CoreError::BadRequest(
+                    "Idempotency-Key".to_string(),
+                    "must be printable ASCII without spaces".to_string(),
+                ));
+            }
+        }
+        let expanded = spec::expand(&spec, &self.limits).map_err(CoreError::Invalid)?;
+        let request_hash = blake3::hash(knotsweep_worker::canonical_value(raw).as_bytes())
+            .to_hex()
+            .to_string();
+        let new = NewSweep {
+            name: expanded.name.clone(),
+            preset: expanded.preset.clone(),
+            spec: serde_json::to_value(&spec).expect("spec serialises"),
+            varied: expanded.varied.clone(),
+            cases: expanded
+                .cases
+                .iter()
+                .map(|c| NewCase::new(c.params.clone()))
+                .collect(),
+            idempotency: idempotency_key.map(|key| Idempotency {
+                key: key.to_string(),
+                request_hash,
+            }),
+        };
+        let (record, replayed) = match self.store.create_sweep(new).await? {
+            CreateOutcome::Created { sweep, cached } => {
+                tracing::info!(
+                    sweep_id = sweep.id,
+                    preset = ?sweep.preset,
+                    cases = expanded.cases.len(),
+                    cached,
+                    "sweep accepted"
+                );
+                (sweep, false)
+            }
+            CreateOutcome::Replayed { sweep } => {
+                tracing::info!(
+                    sweep_id = sweep.id,
+                    "idempotent resubmission: returning the first sweep"
+                );
+                (sweep, true)
+            }
+        };
+        let cases = self.store.sweep_cases(record.id).await?;
+        Ok(SubmitResponse {
+            replayed,
+            sweep: detail(&record, &cases),
+        })
+    }
+
+    pub async fn list_sweeps(&self) -> Result<Vec<SweepSummary>, CoreError> {
+        let sweeps = self.store.list_sweeps().await?;
+        let mut counts: BTreeMap<i64, BTreeMap<String, i64>> = BTreeMap::new();
+        for (id, status, n) in self.store.sweep_status_counts().await? {
+            counts.entry(id).or_default().insert(status, n);
+        }
+        Ok(sweeps
+            .iter()
+            .map(|s| summary(s, counts.remove(&s.id).unwrap_or_default()))
+            .collect())
+    }
+
+    async fn record(&self, id: i64) -> Result<SweepRecord, CoreError> {
+        self.store
+            .get_sweep(id)
+            .await?
+            .ok_or_else(|| CoreError::NotFound(format!("sweep {id}")))
+    }
+
+    pub async fn sweep(&self, id: i64) -> Result<SweepDetail, CoreError> {
+        let record = self.record(id).await?;
+        let cases = self.store.sweep_cases(id).await?;
+        Ok(detail(&record, &cases))
+    }
+
+    /// Pause (queued cases are not handed out; running ones finish), resume,
+    /// or cancel (queued cases are cancelled, running ones stop at their next
+    /// heartbeat; cases another live sweep wants go on).
+    pub async fn control(&self, id: i64, action: SweepAction) -> Result<SweepDetail, CoreError> {
+        let record = match self.store.control_sweep(id, action).await {
+            Err(knotsweep_worker::StoreError::NotFound) => {
+                return Err(CoreError::NotFound(format!("sweep {id}")));
+            }
+            other => other?,
+        };
+        tracing::info!(
+            sweep_id = id,
+            ?action,
+            state = record.state.as_str(),
+            "sweep control"
+        );
+        let cases = self.store.sweep_cases(id).await?;
+        Ok(detail(&record, &cases))
+    }
+
+    pub async fn phase_diagram(&self, id: i64) -> Result<PhaseDiagram, CoreError> {
+        let record = self.record(id).await?;
+        let cases = self.store.sweep_cases(id).await?;
+        let d = detail(&record, &cases);
+        let spec: SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
+        let base = spec::base_params(&spec)
+            .map(|p| serde_json::to_value(p).expect("params serialise"))
+            .unwrap_or(Value::Null);
+        Ok(PhaseDiagram {
+            sweep_id: record.id,
+            name: record.name.clone(),
+            preset: record.preset.clone(),
+            status: d.summary.status,
+            complete: cases.iter().all(|c| c.case.state.is_terminal()),
+            varied: record.varied.clone(),
+            base,
+            solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
+            points: d
+                .cases
+                .into_iter()
+                .map(|c| PhasePoint {
+                    case_id: c.case_id,
+                    params: c.params,
+                    status: c.status,
+                    inversion: c.inversion,
+                    reason: c.reason,
+                })
+                .collect(),
+        })
+    }
+
+    async fn case_record(&self, id: i64) -> Result<CaseRecord, CoreError> {
+        self.store
+            .get_case(id)
+            .await?
+            .ok_or_else(|| CoreError::NotFound(format!("case {id}")))
+    }
+
+    pub async fn case(&self, id: i64) -> Result<CaseDetail, CoreError> {
+        let c = self.case_record(id).await?;
+        let sweeps = self.store.case_sweeps(id).await?;
+        let series = match self.store.case_series_json(id).await? {
+            Some(text) => Some(
+                serde_json::from_str(&text)
+                    .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?,
+            ),
+            None => None,
+        };
+        let logs = self
+            .store
+            .case_logs(id)
+            .await?
+            .into_iter()
+            .map(|l| LogLineView {
+                at: l.at,
+                level: l.level,
+                message: l.message,
+            })
+            .collect();
+        let links = BTreeMap::from([
+            ("self".to_string(), format!("/api/cases/{id}")),
+            ("series_csv".to_string(), format!("/api/cases/{id}/series.csv")),
+            ("frames".to_string(), format!("/api/cases/{id}/frames")),
+        ]);
+        Ok(CaseDetail {
+            id: c.id,
+            key: c.key.clone(),
+            solver_version: c.solver_version.clone(),
+            params: serde_json::to_value(&c.params).expect("params serialise"),
+            status: c.status().to_string(),
+            state: c.state.as_str().to_string(),
+            attempts: c.attempts,
+            max_attempts: c.max_attempts,
+            progress: c.progress,
+            progress_detail: progress_of(&c),
+            lease_owner: c.lease_owner.clone(),
+            lease_expires_at: c.lease_expires_at,
+            last_error: c.last_error.clone(),
+            created_at: c.created_at,
+            started_at: c.started_at,
+            finished_at: c.finished_at,
+            sweeps,
+            result: c.result.as_ref().map(|r| ResultView {
+                outcome: r.outcome.clone(),
+                reason: r.reason.clone(),
+                inversion: r.inversion.as_ref().map(InversionPoint::from),
+                summary: r.summary.clone(),
+                wall_time: r.wall_time,
+                worker: r.worker.clone(),
+                created_at: r.created_at,
+            }),
+            series,
+            logs,
+            links,
+        })
+    }
+
+    /// The series as CSV (one row per sample); 404 before the result.
+    pub async fn series_csv(&self, id: i64) -> Result<String, CoreError> {
+        let c = self.case_record(id).await?;
+        let text = self
+            .store
+            .case_series_json(id)
+            .await?
+            .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))?;
+        let series: Vec<Sample> = serde_json::from_str(&text)
+            .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
+        Ok(series_csv(&series))
+    }
+
+    /// The frames (centreline snapshots) as stored JSON; 404 before the result.
+    pub async fn frames(&self, id: i64) -> Result<String, CoreError> {
+        let c = self.case_record(id).await?;
+        self.store
+            .case_frames_json(id)
+            .await?
+            .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))
+    }
+
+    pub async fn health(&self) -> Health {
+        let database = self.store.queue_depth().await.is_ok();
+        let stalled = self.pool.as_ref().map(|p| p.stalled_slots()).unwrap_or_default();
+        Health {
+            status: if database && stalled.is_empty() {
+                "ok"
+            } else {
+                "degraded"
+            }
+            .to_string(),
+            database,
+            workers: self.pool.as_ref().map_or(0, |p| p.workers()),
+            stalled_workers: stalled,
+            solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
+            uptime_seconds: self.started.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// Prometheus text: cases by status and queue depth (from the store, so
+    /// across every process), this process's workers' counters.
+    pub async fn metrics(&self) -> Result<String, CoreError> {
+        let counts: BTreeMap<String, i64> = self.store.status_counts().await?.into_iter().collect();
+        let depth = self.store.queue_depth().await?;
+        let sweeps = self.store.list_sweeps().await?;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_cases Cases by status.\n# TYPE knotsweep_cases gauge"
+        );
+        for word in STATUS_WORDS {
+            let _ = writeln!(
+                out,
+                "knotsweep_cases{{status=\"{word}\"}} {}",
+                counts.get(word).copied().unwrap_or(0)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_queue_depth Queued cases of active sweeps.\n# TYPE knotsweep_queue_depth gauge\nknotsweep_queue_depth {depth}"
+        );
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_sweeps Sweeps by state.\n# TYPE knotsweep_sweeps gauge"
+        );
+        for state in [SweepState::Active, SweepState::Paused, SweepState::Cancelled] {
+            let n = sweeps.iter().filter(|s| s.state == state).count();
+            let _ = writeln!(out, "knotsweep_sweeps{{state=\"{}\"}} {n}", state.as_str());
+        }
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_workers Embedded worker slots.\n# TYPE knotsweep_workers gauge\nknotsweep_workers {}",
+            self.pool.as_ref().map_or(0, |p| p.workers())
+        );
+        if let Some(pool) = &self.pool {
+            pool.metrics.render(&mut out);
+        }
+        Ok(out)
+    }
+}
+
+/// The series as CSV, one row per sample (the columns of `knotsweep run --csv`).
+pub fn series_csv(series: &[Sample]) -> String {
+    let mut out = String::from(
+        "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations\n",
+    );
+    for s in series {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            s.time,
+            s.l_k_bar,
+            s.l_c_over_l,
+            s.force,
+            s.f_bar,
+            s.width,
+            s.height,
+            s.h_bar,
+            s.kinetic_energy,
+            s.contacts,
+            s.active_contacts,
+            s.max_penetration,
+            s.newton_iterations
+        );
+    }
+    out
+}
+
+fn progress_of(c: &CaseRecord) -> Option<CaseProgress> {
+    c.progress_detail.map(|p| CaseProgress {
+        fraction: p.fraction,
+        l_k_bar: p.l_k_bar,
+        h_bar: p.h_bar,
+        steps: p.steps,
+    })
+}
+
+fn links(id: i64) -> BTreeMap<String, String> {
+    BTreeMap::from([
+        ("self".to_string(), format!("/api/sweeps/{id}")),
+        (
+            "phase_diagram".to_string(),
+            format!("/api/sweeps/{id}/phase-diagram"),
+        ),
+        ("events".to_string(), format!("/api/sweeps/{id}/events")),
+    ])
+}
+
+fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
+    let open = |w: &str| counts.get(w).copied().unwrap_or(0);
+    let (queued, running) = (open("queued"), open("running"));
+    match state {
+        SweepState::Cancelled => SweepStatus::Cancelled,
+        _ if queued + running == 0 => SweepStatus::Done,
+        SweepState::Paused => SweepStatus::Paused,
+        SweepState::Active if running == 0 && counts.values().sum::<i64>() == queued => SweepStatus::Queued,
+        SweepState::Active => SweepStatus::Running,
+    }
+}
+
+fn summary(s: &SweepRecord, counts: BTreeMap<String, i64>) -> SweepSummary {
+    SweepSummary {
+        id: s.id,
+        name: s.name.clone(),
+        preset: s.preset.clone(),
+        state: s.state.as_str().to_string(),
+        status: status_of(s.state, &counts),
+        total: counts.values().sum(),
+        counts,
+        created_at: s.created_at,
+        links: links(s.id),
+    }
+}
+
+/// Why a case has no inversion point (None when it has one).
+fn reason_of(c: &CaseRecord) -> Option<String> {
+    match (&c.result, c.state) {
+        (Some(r), _) if r.inversion.is_some() => None,
+        (Some(r), _) if r.outcome == "completed" => Some(format!(
+            "no inversion detected before the case stopped (min_l_k_bar {}, max_force_bar {:?})",
+            c.params.min_l_k_bar, c.params.max_force_bar
+        )),
+        (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
+        (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
+        (None, CaseState::Cancelled) => Some("cancelled".to_string()),
+        (None, CaseState::Queued) => Some(match &c.last_error {
+            Some(e) => format!("not computed yet (queued; last attempt: {e})"),
+            None => "not computed yet (queued)".to_string(),
+        }),
+        (None, CaseState::Running) => Some("not computed yet (running)".to_string()),
+        (None, CaseState::Done) => Some("result missing".to_string()),
+    }
+}
+
+fn case_view(s: &SweepCase, varied: &[String]) -> SweepCaseView {
+    let c = &s.case;
+    let params = serde_json::to_value(&c.params).expect("params serialise");
+    SweepCaseView {
+        case_id: c.id,
+        position: s.position,
+        params: varied
+            .iter()
+            .map(|name| (name.clone(), params.get(name).cloned().unwrap_or(Value::Null)))
+            .collect(),
+        status: c.status().to_string(),
+        cached: s.cached,
+        attempts: c.attempts,
+        progress: if c.state == CaseState::Done {
+            1.0
+        } else {
+            c.progress
+        },
+        progress_detail: progress_of(c),
+        inversion: c
+            .result
+            .as_ref()
+            .and_then(|r| r.inversion.as_ref())
+            .map(InversionPoint::from),
+        reason: reason_of(c),
+        wall_time: c.result.as_ref().map(|r| r.wall_time),
+    }
+}
+
+/// The sweep's view: counts, progress, ETA and cases.
+pub fn detail(record: &SweepRecord, cases: &[SweepCase]) -> SweepDetail {
+    let mut counts: BTreeMap<String, i64> = BTreeMap::new();
+    for c in cases {
+        *counts.entry(c.case.status().to_string()).or_default() += 1;
+    }
+    let views: Vec<SweepCaseView> = cases.iter().map(|c| case_view(c, &record.varied)).collect();
+    let total = cases.len().max(1) as f64;
+    let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
+    let running: Vec<&SweepCase> = cases
+        .iter()
+        .filter(|c| c.case.state == CaseState::Running)
+        .collect();
+    let running_done: f64 = running.iter().map(|c| c.case.progress).sum();
+    let queued = cases.iter().filter(|c| c.case.state == CaseState::Queued).count() as f64;
+    let summary = summary(record, counts);
+    // ETA: remaining work (queued cases + running remainders) times the mean
+    // case duration (from this sweep's results, else from the running cases'
+    // speed), over the number of cases running in parallel.
+    let durations: Vec<f64> = cases
+        .iter()
+        .filter(|c| !c.cached)
+        .filter_map(|c| c.case.result.as_ref().map(|r| r.wall_time))
+        .collect();
+    let now = knotsweep_worker::store::now_ms();
+    let mean = if durations.is_empty() {
+        let speeds: Vec<f64> = running
+            .iter()
+            .filter(|c| c.case.progress > 0.02)
+            .filter_map(|c| {
+                c.case
+                    .started_at
+                    .map(|t| (now - t) as f64 / 1000.0 / c.case.progress)
+            })
+            .collect();
+        (!speeds.is_empty()).then(|| speeds.iter().sum::<f64>() / speeds.len() as f64)
+    } else {
+        Some(durations.iter().sum::<f64>() / durations.len() as f64)
+    };
+    let remaining = queued + running.len() as f64 - running_done;
+    let eta_seconds = match (summary.status, mean) {
+        (SweepStatus::Running | SweepStatus::Queued, Some(mean)) if !running.is_empty() => {
+            Some(remaining * mean / running.len() as f64)
+        }
+        _ => None,
+    };
+    SweepDetail {
+        varied: record.varied.clone(),
+        spec: record.spec.clone(),
+        progress: ((finished + running_done) / total).clamp(0.0, 1.0),
+        eta_seconds,
+        cached: cases.iter().filter(|c| c.cached).count() as i64,
+        cases: views,
+        summary,
+    }
+}
+
+/// The action named in a control route.
+pub fn action(name: &str) -> Option<SweepAction> {
+    match name {
+        "pause" => Some(SweepAction::Pause),
+        "resume" => Some(SweepAction::Resume),
+        "cancel" => Some(SweepAction::Cancel),
+        _ => None,
+    }
+}

@@ -1,0 +1,477 @@
+//! What a sweep is: a base case plus a grid (or a named preset), and its
+//! expansion into validated cases. The parameters are `solver::case::CaseParams`
+//! (the one definition): the base and every grid value are applied to it by
+//! field name, so any field can be set or varied.
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+use solver::case::CaseParams;
+use std::collections::BTreeMap;
+use utoipa::ToSchema;
+
+/// The limits of a submission. Defaults: 1000 cases per sweep, 64 KiB bodies,
+/// names of at most 200 characters, idempotency keys of at most 200 characters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest number of cases (the product of the grid's list lengths).
+    pub max_cases: usize,
+    /// Largest request body (bytes); larger bodies get 413.
+    pub max_body_bytes: usize,
+    /// Longest sweep name (characters).
+    pub max_name_len: usize,
+    /// Longest `Idempotency-Key` (characters).
+    pub max_idempotency_key_len: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_cases: 1000,
+            max_body_bytes: 64 * 1024,
+            max_name_len: 200,
+            max_idempotency_key_len: 200,
+        }
+    }
+}
+
+/// A sweep to run: a base case and a grid, or a named preset.
+///
+/// Every field is optional. `base` sets any case parameter (the rest take the
+/// paper's defaults); `grid` maps parameter names to lists of values, and the
+/// sweep is their cartesian product (axes in alphabetical order, the last axis
+/// varying fastest). With `preset`, the preset's base and grid are used and
+/// `base` overrides the preset's base (e.g. a coarser `nodes`); `grid` is then
+/// not allowed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+#[schema(example = json!({"name": "h sweep", "base": {"n": 3, "mu": 0.1}, "grid": {"h": [0.0016, 0.0024, 0.0032]}}))]
+pub struct SweepSpec {
+    /// Display name (at most 200 characters).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// A preset name: `fig7`, `fig9` or `fig11` (see `GET /api/presets`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    /// Case parameters common to every case (a partial `CaseParams`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>, schema_with = crate::openapi::partial_case_params)]
+    pub base: Option<Map<String, Value>>,
+    /// Parameter name -> list of values (distinct, at least one each).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<BTreeMap<String, Vec<Object>>>, example = json!({"h": [0.0016, 0.002], "mu": [0.1, 0.2]}))]
+    pub grid: Option<BTreeMap<String, Vec<Value>>>,
+}
+
+/// A field and why its value was refused.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
+pub struct FieldError {
+    /// Where: `base.h`, `grid.n[2]`, `grid`, `preset`, `name`, `body`, ...
+    pub field: String,
+    pub reason: String,
+}
+
+impl FieldError {
+    pub fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// A named sweep reproducing one of the paper's phase diagrams.
+#[derive(Clone, Debug, Serialize, ToSchema)]
+pub struct Preset {
+    pub name: String,
+    /// The figure it reproduces and what is varied.
+    pub description: String,
+    /// The preset's base (partial parameters; the rest are the defaults).
+    #[schema(value_type = Object)]
+    pub base: Map<String, Value>,
+    #[schema(value_type = BTreeMap<String, Vec<Object>>)]
+    pub grid: BTreeMap<String, Vec<Value>>,
+    /// The full parameters of the base case (defaults filled in).
+    #[schema(schema_with = crate::openapi::case_params_ref)]
+    pub base_params: Value,
+    /// Number of cases.
+    pub cases: usize,
+}
+
+fn numbers(values: &[f64]) -> Vec<Value> {
+    values.iter().map(|v| Value::from(*v)).collect()
+}
+
+/// The presets: the paper's Figs 7, 9 and 11.
+pub fn presets() -> Vec<Preset> {
+    let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
+        let base = base.as_object().cloned().unwrap_or_default();
+        let base_params: CaseParams =
+            serde_json::from_value(Value::Object(base.clone())).expect("preset base is valid");
+        let cases = values.len();
+        Preset {
+            name: name.to_string(),
+            description: description.to_string(),
+            base,
+            grid: BTreeMap::from([(axis.to_string(), values)]),
+            base_params: serde_json::to_value(base_params).expect("params serialise"),
+            cases,
+        }
+    };
+    vec![
+        make(
+            "fig7",
+            "Paper Fig. 7: inversion point vs rod radius h (n = 3, mu = 0.1, h = 1.6 ... 3.2 mm)",
+            serde_json::json!({"n": 3, "mu": 0.1}),
+            "h",
+            numbers(&[1.6e-3, 2.0e-3, 2.4e-3, 2.8e-3, 3.2e-3]),
+        ),
+        make(
+            "fig9",
+            "Paper Fig. 9: inversion point vs number of passes n (h = 1.6 mm, mu = 0.1, n = 1 ... 5)",
+            serde_json::json!({"h": 1.6e-3, "mu": 0.1}),
+            "n",
+            (1..=5).map(Value::from).collect(),
+        ),
+        make(
+            "fig11",
+            "Paper Fig. 11: inversion point vs friction mu (n = 3, h = 3.4 mm, mu = 0.1 ... 0.7)",
+            serde_json::json!({"n": 3, "h": 3.4e-3}),
+            "mu",
+            numbers(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
+        ),
+    ]
+}
+
+pub fn preset(name: &str) -> Option<Preset> {
+    presets().into_iter().find(|p| p.name == name)
+}
+
+/// One case of an expanded sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridCase {
+    pub params: CaseParams,
+    /// The grid axes' values of this case, in axis order.
+    pub varied: Vec<(String, Value)>,
+}
+
+/// A validated sweep, ready to enqueue.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expanded {
+    pub name: Option<String>,
+    pub preset: Option<String>,
+    /// The effective base (preset base + given base) as given (partial).
+    pub base: Map<String, Value>,
+    /// Axis names in order.
+    pub varied: Vec<String>,
+    pub cases: Vec<GridCase>,
+}
+
+/// The full parameters of a spec's base (preset base, then the given base),
+/// or `None` if they do not parse.
+pub fn base_params(spec: &SweepSpec) -> Option<CaseParams> {
+    let mut base = spec
+        .preset
+        .as_deref()
+        .and_then(preset)
+        .map(|p| p.base)
+        .unwrap_or_default();
+    if let Some(given) = &spec.base {
+        base.extend(given.clone());
+    }
+    serde_json::from_value(Value::Object(base)).ok()
+}
+
+/// Names of `CaseParams`'s fields (from its serialisation: no second list).
+pub fn param_names() -> Vec<String> {
+    match serde_json::to_value(CaseParams::default()) {
+        Ok(Value::Object(m)) => m.keys().cloned().collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// `CaseParams` with one field set.
+fn with_one(name: &str, value: &Value) -> Result<CaseParams, serde_json::Error> {
+    let mut object = Map::new();
+    object.insert(name.to_string(), value.clone());
+    serde_json::from_value(Value::Object(object))
+}
+
+/// Unknown names and values of the wrong type in a partial `CaseParams`.
+fn check_object(prefix: &str, object: &Map<String, Value>, names: &[String]) -> Vec<FieldError> {
+    let mut errors = Vec::new();
+    for (name, value) in object {
+        if !names.contains(name) {
+            errors.push(FieldError::new(
+                format!("{prefix}.{name}"),
+                format!("unknown parameter; known: {}", names.join(", ")),
+            ));
+        } else if let Err(e) = with_one(name, value) {
+            errors.push(FieldError::new(format!("{prefix}.{name}"), e.to_string()));
+        }
+    }
+    errors
+}
+
+/// Checks a spec against the limits and expands it into cases, or returns
+/// every problem found (field and reason).
+pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldError>> {
+    let mut errors = Vec::new();
+    if let Some(name) = &spec.name
+        && name.chars().count() > limits.max_name_len
+    {
+        errors.push(FieldError::new(
+            "name",
+            format!("at most {} characters", limits.max_name_len),
+        ));
+    }
+    let preset = match &spec.preset {
+        None => None,
+        Some(name) => match preset(name) {
+            Some(p) => Some(p),
+            None => {
+                let known: Vec<String> = presets().into_iter().map(|p| p.name).collect();
+                errors.push(FieldError::new(
+                    "preset",
+                    format!("unknown preset {name:?}; known: {}", known.join(", ")),
+                ));
+                None
+            }
+        },
+    };
+    if spec.preset.is_some() && spec.grid.is_some() {
+        errors.push(FieldError::new(
+            "grid",
+            "a preset defines the grid: give either preset or grid",
+        ));
+    }
+    let names = param_names();
+    let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
+    if let Some(given) = &spec.base {
+        errors.extend(check_object("base", given, &names));
+        base.extend(given.clone());
+    }
+    let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
+    let mut axes: Vec<(String, Vec<Value>)> = Vec::new();
+    let mut count: usize = 1;
+    for (axis, values) in grid.into_iter().flatten() {
+        if !names.contains(axis) {
+            errors.push(FieldError::new(
+                format!("grid.{axis}"),
+                format!("unknown parameter; known: {}", names.join(", ")),
+            ));
+            continue;
+        }
+        if values.is_empty() {
+            errors.push(FieldError::new(
+                format!("grid.{axis}"),
+                "needs at least one value",
+            ));
+            continue;
+        }
+        for (i, v) in values.iter().enumerate() {
+            if values[..i].contains(v) {
+                errors.push(FieldError::new(
+                    format!("grid.{axis}[{i}]"),
+                    format!("duplicate value {v}"),
+                ));
+            }
+            if let Err(e) = with_one(axis, v) {
+                errors.push(FieldError::new(format!("grid.{axis}[{i}]"), e.to_string()));
+            }
+        }
+        count = count.saturating_mul(values.len());
+        axes.push((axis.clone(), values.clone()));
+    }
+    if count > limits.max_cases {
+        errors.push(FieldError::new(
+            "grid",
+            format!(
+                "{count} cases exceed the limit of {} cases per sweep",
+                limits.max_cases
+            ),
+        ));
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    // The cartesian product, last axis fastest.
+    let mut cases = Vec::with_capacity(count);
+    let mut index = vec![0usize; axes.len()];
+    for _ in 0..count {
+        let mut object = base.clone();
+        let mut varied = Vec::with_capacity(axes.len());
+        for ((axis, values), &i) in axes.iter().zip(&index) {
+            object.insert(axis.clone(), values[i].clone());
+            varied.push((axis.clone(), values[i].clone()));
+        }
+        match serde_json::from_value::<CaseParams>(Value::Object(object)) {
+            Ok(params) => {
+                if let Err(problems) = params.validate() {
+                    for p in problems {
+                        let field = match axes.iter().zip(&index).find(|((axis, _), _)| *axis == p.field) {
+                            Some((_, i)) => format!("grid.{}[{i}]", p.field),
+                            None => format!("base.{}", p.field),
+                        };
+                        if !errors.iter().any(|e: &FieldError| e.field == field) {
+                            errors.push(FieldError::new(field, p.reason));
+                        }
+                    }
+                }
+                cases.push(GridCase { params, varied });
+            }
+            Err(e) => errors.push(FieldError::new("base", e.to_string())),
+        }
+        for k in (0..index.len()).rev() {
+            index[k] += 1;
+            if index[k] < axes[k].1.len() {
+                break;
+            }
+            index[k] = 0;
+        }
+        if errors.len() >= 50 {
+            break;
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(Expanded {
+        name: spec.name.clone(),
+        preset: spec.preset.clone(),
+        base,
+        varied: axes.into_iter().map(|(a, _)| a).collect(),
+        cases,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(json: Value) -> SweepSpec {
+        serde_json::from_value(json).unwrap()
+    }
+
+    fn fields(r: Result<Expanded, Vec<FieldError>>) -> Vec<String> {
+        r.unwrap_err().into_iter().map(|e| e.field).collect()
+    }
+
+    #[test]
+    fn presets_are_the_papers_grids() {
+        let l = Limits::default();
+        let fig7 = expand(&spec(serde_json::json!({"preset": "fig7"})), &l).unwrap();
+        assert_eq!(fig7.varied, ["h"]);
+        let hs: Vec<f64> = fig7.cases.iter().map(|c| c.params.h).collect();
+        assert_eq!(hs, [1.6e-3, 2.0e-3, 2.4e-3, 2.8e-3, 3.2e-3]);
+        assert!(fig7.cases.iter().all(|c| c.params.n == 3 && c.params.mu == 0.1));
+        let fig9 = expand(&spec(serde_json::json!({"preset": "fig9"})), &l).unwrap();
+        let ns: Vec<u32> = fig9.cases.iter().map(|c| c.params.n).collect();
+        assert_eq!(ns, [1, 2, 3, 4, 5]);
+        assert!(
+            fig9.cases
+                .iter()
+                .all(|c| c.params.h == 1.6e-3 && c.params.mu == 0.1)
+        );
+        let fig11 = expand(&spec(serde_json::json!({"preset": "fig11"})), &l).unwrap();
+        let mus: Vec<f64> = fig11.cases.iter().map(|c| c.params.mu).collect();
+        assert_eq!(mus, [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
+        assert!(
+            fig11
+                .cases
+                .iter()
+                .all(|c| c.params.n == 3 && c.params.h == 3.4e-3)
+        );
+        let coarse = expand(
+            &spec(serde_json::json!({"preset": "fig9", "base": {"nodes": 151}})),
+            &l,
+        )
+        .unwrap();
+        assert!(
+            coarse
+                .cases
+                .iter()
+                .all(|c| c.params.nodes == 151 && c.params.h == 1.6e-3)
+        );
+    }
+
+    #[test]
+    fn grid_is_the_cartesian_product_last_axis_fastest() {
+        let e = expand(
+            &spec(serde_json::json!({"base": {"nodes": 151}, "grid": {"n": [1, 2], "mu": [0.1, 0.2, 0.3]}})),
+            &Limits::default(),
+        )
+        .unwrap();
+        assert_eq!(e.varied, ["mu", "n"]);
+        let got: Vec<(f64, u32)> = e.cases.iter().map(|c| (c.params.mu, c.params.n)).collect();
+        assert_eq!(got, [(0.1, 1), (0.1, 2), (0.2, 1), (0.2, 2), (0.3, 1), (0.3, 2)]);
+        assert!(e.cases.iter().all(|c| c.params.nodes == 151));
+        let single = expand(&SweepSpec::default(), &Limits::default()).unwrap();
+        assert_eq!(single.cases.len(), 1);
+        assert_eq!(single.cases[0].params, CaseParams::default());
+    }
+
+    #[test]
+    fn bad_input_names_the_field() {
+        let l = Limits::default();
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"base": {"radius": 1}})), &l)),
+            ["base.radius"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"base": {"n": 2.5}})), &l)),
+            ["base.n"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"base": {"mu": "high"}})), &l)),
+            ["base.mu"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"base": {"n": 9}})), &l)),
+            ["base.n"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"grid": {"n": [1, 9]}})), &l)),
+            ["grid.n[1]"]
+        );
+        assert_eq!(
+            fields(expand(
+                &spec(serde_json::json!({"grid": {"h": [0.001, 0.03]}})),
+                &l
+            )),
+            ["grid.h[1]"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"grid": {"n": [1, 1.5]}})), &l)),
+            ["grid.n[1]"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"grid": {"foo": [1]}})), &l)),
+            ["grid.foo"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"grid": {"n": []}})), &l)),
+            ["grid.n"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"grid": {"n": [1, 1]}})), &l)),
+            ["grid.n[1]"]
+        );
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"preset": "fig8"})), &l)),
+            ["preset"]
+        );
+        assert_eq!(
+            fields(expand(
+                &spec(serde_json::json!({"preset": "fig7", "grid": {"n": [1]}})),
+                &l
+            )),
+            ["grid"]
+        );
+        let many: Vec<Value> = (0..40).map(|i| Value::from(0.01 * f64::from(i))).collect();
+        let big = spec(serde_json::json!({"grid": {"mu": many, "relax_time": many}}));
+        assert_eq!(fields(expand(&big, &l)), ["grid"]);
+        assert_eq!(
+            fields(expand(&spec(serde_json::json!({"name": "x".repeat(201)})), &l)),
+            ["name"]
+        );
+    }
+}

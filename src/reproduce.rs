@@ -1,0 +1,316 @@
+//! `knotsweep reproduce`: reruns the paper's Sec. 4 checks with the full model
+//! and writes `docs/VALIDATION.md` (a table of command, figure and pass/fail)
+//! with SVG curves of F bar and H bar for the n sweep (paper Fig. 8 a, b).
+use crate::plot::{Curve, line_chart};
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use solver::case::CaseParams;
+use solver::protocol::{self, CaseReport, Status};
+use std::fmt::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Markdown report to write.
+    #[arg(long, default_value = "docs/VALIDATION.md")]
+    out: PathBuf,
+    /// Directory for the SVG figures.
+    #[arg(long, default_value = "docs/validation")]
+    figures: PathBuf,
+    /// Also write each case's full JSON report into this directory.
+    #[arg(long)]
+    raw: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// A named case and the flags that reproduce it with `knotsweep run`.
+struct Job {
+    key: &'static str,
+    params: CaseParams,
+}
+
+fn job(key: &'static str, f: impl FnOnce(&mut CaseParams)) -> Job {
+    let mut params = CaseParams::default();
+    f(&mut params);
+    Job { key, params }
+}
+
+fn jobs() -> Vec<Job> {
+    let mut v = vec![
+        job("n3", |_| {}),
+        job("n1", |p| p.n = 1),
+        job("n2", |p| p.n = 2),
+        job("n4", |p| p.n = 4),
+    ];
+    for (key, h) in [
+        ("h2.0", 2.0e-3),
+        ("h2.4", 2.4e-3),
+        ("h2.8", 2.8e-3),
+        ("h3.2", 3.2e-3),
+    ] {
+        v.push(job(key, |p| p.h = h));
+    }
+    for (key, mu) in [
+        ("mu0.1", 0.1),
+        ("mu0.2", 0.2),
+        ("mu0.3", 0.3),
+        ("mu0.4", 0.4),
+        ("mu0.5", 0.5),
+        ("mu0.6", 0.6),
+        ("mu0.7", 0.7),
+    ] {
+        v.push(job(key, |p| {
+            p.h = 3.4e-3;
+            p.mu = mu;
+        }));
+    }
+    v.push(job("dt_half", |p| p.dt /= 2.0));
+    v.push(job("K401", |p| p.nodes = 401));
+    v.push(job("speed_half", |p| p.pull_speed /= 2.0));
+    v.push(job("speed_1mm", |p| p.pull_speed = 1e-3));
+    v
+}
+
+/// The `knotsweep run` flags that differ from the defaults.
+fn command(p: &CaseParams) -> String {
+    let d = CaseParams::default();
+    let mut s = String::from("knotsweep run");
+    if p.n != d.n {
+        write!(s, " --n {}", p.n).ok();
+    }
+    if p.h != d.h {
+        write!(s, " --h {:e}", p.h).ok();
+    }
+    if p.mu != d.mu {
+        write!(s, " --mu {}", p.mu).ok();
+    }
+    if p.nodes != d.nodes {
+        write!(s, " --nodes {}", p.nodes).ok();
+    }
+    if p.dt != d.dt {
+        write!(s, " --dt {:e}", p.dt).ok();
+    }
+    if p.pull_speed != d.pull_speed {
+        write!(s, " --pull-speed {:e}", p.pull_speed).ok();
+    }
+    s
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let jobs = jobs();
+    std::fs::create_dir_all(&args.figures).with_context(|| format!("creating {}", args.figures.display()))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()?;
+    let bar = ProgressBar::new(jobs.len() as u64).with_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} cases {elapsed_precise} {msg}")
+            .expect("valid template"),
+    );
+    let reports: Vec<CaseReport> = pool.install(|| {
+        jobs.par_iter()
+            .map(|j| {
+                let r = protocol::run(&j.params, &mut |_| true);
+                tracing::info!(case = j.key, status = ?r.status, inversion = ?r.inversion.map(|i| i.l_k_bar), wall = r.stats.wall_time, "case done");
+                bar.inc(1);
+                r
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    if let Some(dir) = &args.raw {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        for (j, r) in jobs.iter().zip(&reports) {
+            let path = dir.join(format!("{}.json", j.key));
+            std::fs::write(&path, serde_json::to_string(r)?)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+    }
+    let get = |key: &str| {
+        jobs.iter()
+            .position(|j| j.key == key)
+            .map(|i| (&jobs[i], &reports[i]))
+    };
+    let doc = report(&get)?;
+    for (file, y_label, pick) in [
+        (
+            "n_sweep_F_bar.svg",
+            "F bar",
+            (|s: &solver::measurements::Sample| s.f_bar) as fn(&_) -> f64,
+        ),
+        (
+            "n_sweep_H_bar.svg",
+            "H bar",
+            |s: &solver::measurements::Sample| s.h_bar,
+        ),
+    ] {
+        let mut curves = Vec::new();
+        let labels = ["n = 1", "n = 2", "n = 3", "n = 4"];
+        for (key, label) in ["n1", "n2", "n3", "n4"].into_iter().zip(labels) {
+            if let Some((_, r)) = get(key) {
+                curves.push(Curve {
+                    label,
+                    points: r.series.iter().map(|s| (s.l_k_bar, pick(s))).collect(),
+                });
+            }
+        }
+        let svg = line_chart(
+            &format!("{y_label} against l_k bar, h = 1.6 mm, mu = 0.1"),
+            "l_k bar",
+            y_label,
+            &curves,
+            &[],
+        )?;
+        std::fs::write(args.figures.join(file), svg)?;
+    }
+    if let Some(parent) = args.out.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    std::fs::write(&args.out, doc).with_context(|| format!("writing {}", args.out.display()))?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+type Lookup<'a> = dyn Fn(&str) -> Option<(&'a Job, &'a CaseReport)> + 'a;
+
+fn inversion(r: &CaseReport) -> Option<f64> {
+    (r.status == Status::Completed)
+        .then_some(())
+        .and(r.inversion.map(|i| i.l_k_bar))
+}
+
+fn describe(r: &CaseReport) -> String {
+    match (r.status, r.inversion) {
+        (Status::Completed, Some(i)) => format!("l_k bar {:.1} (l_c/L {:.3})", i.l_k_bar, i.l_c_over_l),
+        (Status::Completed, None) => "no inversion".to_string(),
+        (s, _) => format!("{s:?}: {}", r.reason),
+    }
+}
+
+fn report(get: &Lookup) -> Result<String> {
+    let mut rows: Vec<(String, String, String, bool)> = Vec::new();
+    let base = get("n3").map(|(_, r)| r).context("base case missing")?;
+    let base_l = inversion(base);
+    rows.push((
+        "n = 3, h = 1.6 mm: inversion at l_k bar in [115, 160] (paper: near 130-140, l_c/L 0.78-0.79)".into(),
+        command(&get("n3").unwrap().0.params),
+        describe(base),
+        base_l.is_some_and(|l| (115.0..=160.0).contains(&l)),
+    ));
+    let n1 = get("n1").map(|(_, r)| r).context("n1 missing")?;
+    rows.push((
+        "n = 1: no inversion".into(),
+        command(&get("n1").unwrap().0.params),
+        describe(n1),
+        n1.status == Status::Completed && n1.inversion.is_none(),
+    ));
+    let ns: Vec<Option<f64>> = ["n2", "n3", "n4"]
+        .iter()
+        .map(|k| get(k).and_then(|(_, r)| inversion(r)))
+        .collect();
+    let grows = ns.iter().all(Option::is_some) && ns.windows(2).all(|w| w[1] > w[0]);
+    rows.push((
+        "n = 2, 3, 4 at h = 1.6 mm: critical l_k bar grows with n (paper: n = 4 near l_c/L 0.66-0.68)".into(),
+        "knotsweep run --n 2 / 3 / 4".into(),
+        ["n2", "n3", "n4"]
+            .iter()
+            .map(|k| {
+                format!(
+                    "n{}: {}",
+                    &k[1..],
+                    get(k).map(|(_, r)| describe(r)).unwrap_or_default()
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; "),
+        grows,
+    ));
+    let hs: Vec<Option<f64>> = ["n3", "h2.0", "h2.4", "h2.8", "h3.2"]
+        .iter()
+        .map(|k| get(k).and_then(|(_, r)| inversion(r)))
+        .collect();
+    let (spread_text, spread_ok) = if hs.iter().all(Option::is_some) {
+        let v: Vec<f64> = hs.iter().flatten().copied().collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(*x), b.max(*x))
+        });
+        let spread = (hi - lo) / mean;
+        (
+            format!(
+                "{} ; spread (max - min)/mean = {:.1} %",
+                v.iter().map(|x| format!("{x:.1}")).collect::<Vec<_>>().join(", "),
+                100.0 * spread
+            ),
+            spread <= 0.15,
+        )
+    } else {
+        ("a case did not invert".into(), false)
+    };
+    rows.push((
+        "n = 3, h = 1.6 ... 3.2 mm: critical l_k bar nearly the same (spread <= 15 %)".into(),
+        "knotsweep run --h 1.6e-3 / 2.0e-3 / 2.4e-3 / 2.8e-3 / 3.2e-3".into(),
+        spread_text,
+        spread_ok,
+    ));
+    let mus: Vec<Option<f64>> = ["mu0.1", "mu0.2", "mu0.3", "mu0.4", "mu0.5", "mu0.6", "mu0.7"]
+        .iter()
+        .map(|k| get(k).and_then(|(_, r)| inversion(r)))
+        .collect();
+    let mu_ok = mus.iter().all(Option::is_some) && mus.windows(2).all(|w| w[1] >= w[0]) && mus[6] > mus[0];
+    rows.push((
+        "n = 3, h = 3.4 mm, mu = 0.1 ... 0.7: critical l_k bar grows with mu".into(),
+        "knotsweep run --h 3.4e-3 --mu 0.1 / ... / 0.7".into(),
+        mus.iter()
+            .map(|m| m.map_or("-".to_string(), |x| format!("{x:.1}")))
+            .collect::<Vec<_>>()
+            .join(", "),
+        mu_ok,
+    ));
+    for (key, what) in [
+        ("dt_half", "dt halved"),
+        ("K401", "K = 401"),
+        ("speed_half", "pull speed halved (1.5 mm/s)"),
+        ("speed_1mm", "pull speed 1 mm/s (the paper's text)"),
+    ] {
+        let (j, r) = get(key).context("convergence case missing")?;
+        let l = inversion(r);
+        let change = match (l, base_l) {
+            (Some(a), Some(b)) => Some((a - b).abs() / b),
+            _ => None,
+        };
+        rows.push((
+            format!("convergence: {what}, inversion within 3 % of the default"),
+            command(&j.params),
+            format!(
+                "{} ; change {}",
+                describe(r),
+                change.map_or("-".into(), |c| format!("{:.2} %", 100.0 * c))
+            ),
+            change.is_some_and(|c| c <= 0.03),
+        ));
+    }
+    let mut doc = String::new();
+    writeln!(doc, "# Validation: reproduction of the paper's Sec. 4\n")?;
+    writeln!(
+        doc,
+        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = 1 m, K = 301, E = 1.8 MPa, nu = 0.5, rho = 1000 kg/m^3, dt = 1 ms, pull speed 3 mm/s per clamp, mu = 0.1, h = 1.6 mm.\n"
+    )?;
+    writeln!(doc, "| check | command | figure | pass |\n|---|---|---|---|")?;
+    let passed = rows.iter().filter(|r| r.3).count();
+    for (what, cmd, fig, ok) in &rows {
+        writeln!(
+            doc,
+            "| {what} | `{cmd}` | {fig} | {} |",
+            if *ok { "yes" } else { "**no**" }
+        )?;
+    }
+    writeln!(doc, "\n{passed} passed, {} failed\n", rows.len() - passed)?;
+    writeln!(
+        doc,
+        "F bar and H bar against l_k bar for n = 1..4 (paper Fig. 8 a, b):\n\n![F bar](validation/n_sweep_F_bar.svg)\n![H bar](validation/n_sweep_H_bar.svg)"
+    )?;
+    Ok(doc)
+}

@@ -1,0 +1,1188 @@
+//! End-to-end tests of the sweep service: real HTTP on an ephemeral port, a
+//! real SQLite file in a temporary directory, the real solver (cases made
+//! short: see `common::tiny_base`), worker processes of the built binary.
+mod common;
+
+use common::*;
+use knotsweep_worker::store::sqlite::{SqliteOptions, SqliteStore};
+use knotsweep_worker::store::{Heartbeat, Store};
+use knotsweep_worker::{PoolConfig, WorkerPool};
+use reqwest::StatusCode;
+use serde_json::{Value, json};
+use std::process::{Command, Stdio};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_knotsweep");
+
+fn pool_config(workers: usize) -> PoolConfig {
+    let mut c = PoolConfig::new(workers).with_lease(Duration::from_secs(2));
+    c.poll = Duration::from_millis(20);
+    c
+}
+
+async fn logs(store: &SqliteStore, case_id: i64) -> Vec<String> {
+    store
+        .case_logs(case_id)
+        .await
+        .unwrap()
+        .into_iter()
+        .map(|l| l.message)
+        .collect()
+}
+
+fn claims(logs: &[String]) -> usize {
+    logs.iter().filter(|m| m.starts_with("claimed by")).count()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn submit_run_and_phase_diagram_end_to_end() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 2)).await;
+    let (url, c) = (server.url(), client());
+
+    // Four real cases: K = 101 is too coarse for the knot builder at h = 5 mm
+    // (a solver result `invalid`, not a retry); K = 121 runs.
+    let spec = json!({"name": "e2e", "base": tiny_base(), "grid": {"mu": [0.1, 0.3], "nodes": [101, 121]}});
+    let r = c
+        .post(format!("{url}/api/sweeps"))
+        .json(&spec)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::CREATED);
+    let location = r.headers()["location"].to_str().unwrap().to_string();
+    let sweep: Value = r.json().await.unwrap();
+    let id = sweep["id"].as_i64().unwrap();
+    assert_eq!(location, format!("/api/sweeps/{id}"));
+    assert_eq!(sweep["replayed"], false);
+    assert_eq!(sweep["total"], 4);
+    assert_eq!(sweep["varied"], json!(["mu", "nodes"]));
+    assert_eq!(sweep["cases"][1]["params"], json!({"mu": 0.1, "nodes": 121}));
+
+    // Follow the server-sent events to the end.
+    let mut events = c
+        .get(format!("{url}/api/sweeps/{id}/events"))
+        .send()
+        .await
+        .unwrap();
+    assert!(
+        events.headers()["content-type"]
+            .to_str()
+            .unwrap()
+            .starts_with("text/event-stream")
+    );
+    let mut text = String::new();
+    tokio::time::timeout(Duration::from_secs(60), async {
+        while let Some(chunk) = events.chunk().await.unwrap() {
+            text.push_str(&String::from_utf8_lossy(&chunk));
+            if text.contains("event: done") && text.ends_with("\n\n") {
+                break;
+            }
+        }
+    })
+    .await
+    .expect("the event stream ends with a done event");
+    let done_data = text
+        .split("event: done\ndata: ")
+        .nth(1)
+        .unwrap()
+        .lines()
+        .next()
+        .unwrap();
+    let done: Value = serde_json::from_str(done_data).unwrap();
+    assert_eq!(done["status"], "done");
+    assert_eq!(done["progress"], 1.0);
+
+    let sweep = wait_sweep(&c, &url, id, Duration::from_secs(5), finished).await;
+    assert_eq!(count(&sweep, "invalid"), 2, "{sweep:#}");
+    assert_eq!(count(&sweep, "completed"), 2, "{sweep:#}");
+
+    let (status, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(diagram["complete"], true);
+    assert_eq!(diagram["base"]["h"], 5e-3);
+    assert_eq!(diagram["base"]["youngs_modulus"], 1.8e6, "defaults filled in");
+    let points = diagram["points"].as_array().unwrap();
+    assert_eq!(points.len(), 4);
+    for p in points {
+        assert!(
+            p.get("inversion").is_some() && p["inversion"].is_null(),
+            "short cases do not invert: {p}"
+        );
+        let reason = p["reason"].as_str().unwrap();
+        if p["params"]["nodes"] == 101 {
+            assert_eq!(p["status"], "invalid");
+            assert!(reason.contains("knot builder"), "{reason}");
+        } else {
+            assert_eq!(p["status"], "completed");
+            assert!(reason.contains("no inversion"), "{reason}");
+        }
+    }
+
+    // A completed case: parameters, result, series, CSV, frames, logs.
+    let case_id = sweep["cases"][1]["case_id"].as_i64().unwrap();
+    let (status, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(case["params"]["nodes"], 121);
+    assert_eq!(case["params"]["mu"], 0.1);
+    assert_eq!(case["status"], "completed");
+    assert_eq!(case["attempts"], 1);
+    assert_eq!(case["sweeps"], json!([id]));
+    assert_eq!(case["key"].as_str().unwrap().len(), 64);
+    let series = case["series"].as_array().unwrap();
+    assert!(!series.is_empty());
+    assert!(case["result"]["wall_time"].as_f64().unwrap() > 0.0);
+    let messages: Vec<&str> = case["logs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["message"].as_str().unwrap())
+        .collect();
+    assert!(messages[0].starts_with("claimed by"), "{messages:?}");
+    assert!(
+        messages.iter().any(|m| m.starts_with("result completed")),
+        "{messages:?}"
+    );
+    let (status, csv) = get_text(&c, &format!("{url}/api/cases/{case_id}/series.csv")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(csv.starts_with("time,l_k_bar,l_c_over_L,F,F_bar,"));
+    assert_eq!(csv.lines().count(), series.len() + 1);
+    let (status, frames) = get(&c, &format!("{url}/api/cases/{case_id}/frames")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(frames[0]["points"].as_array().unwrap().len(), 121);
+    // The invalid case is a result: one attempt, no retry.
+    let invalid_id = sweep["cases"][0]["case_id"].as_i64().unwrap();
+    let (_, invalid) = get(&c, &format!("{url}/api/cases/{invalid_id}")).await;
+    assert_eq!(
+        (invalid["status"].as_str(), invalid["attempts"].as_i64()),
+        (Some("invalid"), Some(1))
+    );
+
+    // Operations: list, metrics, health, OpenAPI, Swagger UI, the page.
+    let (_, list) = get(&c, &format!("{url}/api/sweeps")).await;
+    assert_eq!(list[0]["id"], id);
+    assert_eq!(list[0]["status"], "done");
+    let (_, metrics) = get_text(&c, &format!("{url}/metrics")).await;
+    for line in [
+        "knotsweep_cases{status=\"completed\"} 2",
+        "knotsweep_cases{status=\"invalid\"} 2",
+        "knotsweep_cases{status=\"queued\"} 0",
+        "knotsweep_queue_depth 0",
+        "knotsweep_claims_total 4",
+        "knotsweep_completions_total{outcome=\"completed\"} 2",
+        "knotsweep_case_duration_seconds_count 4",
+        "knotsweep_workers 2",
+    ] {
+        assert!(
+            metrics.lines().any(|l| l == line),
+            "missing {line:?} in\n{metrics}"
+        );
+    }
+    let (status, health) = get(&c, &format!("{url}/healthz")).await;
+    assert_eq!((status, health["status"].as_str()), (StatusCode::OK, Some("ok")));
+    let (status, doc) = get(&c, &format!("{url}/api/openapi.json")).await;
+    assert_eq!(status, StatusCode::OK);
+    for path in [
+        "/api/sweeps",
+        "/api/sweeps/{id}/phase-diagram",
+        "/api/cases/{id}/series.csv",
+        "/metrics",
+    ] {
+        assert!(doc["paths"].get(path).is_some(), "{path} undocumented");
+    }
+    let params = &doc["components"]["schemas"]["CaseParams"]["properties"];
+    assert_eq!(params["h"]["default"], 1.6e-3);
+    assert!(doc["components"]["schemas"].get("PhaseDiagram").is_some());
+    let (status, swagger) = get_text(&c, &format!("{url}/api/docs/")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(swagger.contains("swagger-ui"), "{swagger}");
+    let (status, page) = get_text(&c, &format!("{url}/")).await;
+    assert!(status == StatusCode::OK && page.contains("knotsweep"));
+    let (_, presets) = get(&c, &format!("{url}/api/presets")).await;
+    let names: Vec<&str> = presets
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["fig7", "fig9", "fig11"]);
+    assert_eq!(presets[1]["grid"]["n"], json!([1, 2, 3, 4, 5]));
+    assert_eq!(presets[2]["base_params"]["h"], 3.4e-3);
+
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn idempotent_resubmission_returns_the_first_sweep() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    let key = [("idempotency-key", "retry-7f3a")];
+
+    let (status, first) = post_raw(
+        &c,
+        &endpoint,
+        r#"{"grid": {"mu": [0.1, 0.2]}, "base": {"n": 2}}"#,
+        &key,
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{first}");
+    // The same request again (keys in another order): the first sweep.
+    let (status, again) = post_raw(
+        &c,
+        &endpoint,
+        r#"{"base": {"n": 2}, "grid": {"mu": [0.1, 0.2]}}"#,
+        &key,
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK, "{again}");
+    assert_eq!(again["replayed"], true);
+    assert_eq!(again["id"], first["id"]);
+    let (_, list) = get(&c, &endpoint).await;
+    assert_eq!(list.as_array().unwrap().len(), 1);
+    // The same key with another request is a conflict.
+    let (status, conflict) = post_raw(&c, &endpoint, r#"{"base": {"n": 4}}"#, &key).await;
+    assert_eq!(status, StatusCode::CONFLICT, "{conflict}");
+    // Without a key: a new sweep over the same (deduplicated) cases.
+    let (status, other) = post_raw(
+        &c,
+        &endpoint,
+        r#"{"base": {"n": 2}, "grid": {"mu": [0.1, 0.2]}}"#,
+        &[],
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED);
+    assert_ne!(other["id"], first["id"]);
+    assert_eq!(case_ids(&other), case_ids(&first));
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn computed_cases_are_reused_across_sweeps() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let endpoint = format!("{url}/api/sweeps");
+
+    let (status, a) = post(
+        &c,
+        &endpoint,
+        &json!({"base": tiny_base(), "grid": {"mu": [0.2]}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED);
+    let a_id = a["id"].as_i64().unwrap();
+    let a_done = wait_sweep(&c, &url, a_id, Duration::from_secs(30), finished).await;
+    let case_a = case_ids(&a_done)[0];
+    let (_, before) = get(&c, &format!("{url}/api/cases/{case_a}")).await;
+
+    // The same case spelled differently (0.2 as 2e-1), plus a new one.
+    let base = with(tiny_base(), json!({"h": 0.005}));
+    let (status, b) = post(&c, &endpoint, &json!({"base": base, "grid": {"mu": [2e-1, 0.4]}})).await;
+    assert_eq!(status, StatusCode::CREATED);
+    assert_eq!(b["cached"], 1, "{b:#}");
+    assert_eq!(b["cases"][0]["case_id"], case_a);
+    assert_eq!(b["cases"][0]["cached"], true);
+    assert_eq!(b["cases"][0]["status"], "completed", "reused at once");
+    assert_eq!(b["cases"][1]["cached"], false);
+    let b_id = b["id"].as_i64().unwrap();
+    wait_sweep(&c, &url, b_id, Duration::from_secs(30), finished).await;
+
+    let (_, after) = get(&c, &format!("{url}/api/cases/{case_a}")).await;
+    assert_eq!(after["result"], before["result"], "the result was not recomputed");
+    assert_eq!(after["sweeps"], json!([a_id, b_id]));
+    assert_eq!(claims(&logs(&store, case_a).await), 1);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pause_holds_queued_cases_and_resume_releases_them() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let (status, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": tiny_base(), "grid": {"mu": [0.11, 0.12, 0.13]}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED);
+    let id = s["id"].as_i64().unwrap();
+    let (status, paused) = post(&c, &format!("{url}/api/sweeps/{id}/pause"), &json!({})).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(
+        (paused["state"].as_str(), paused["status"].as_str()),
+        (Some("paused"), Some("paused"))
+    );
+
+    // Workers come up: nothing of the paused sweep is handed out.
+    let pool = WorkerPool::start(server.store(), pool_config(2));
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    let (_, held) = get(&c, &format!("{url}/api/sweeps/{id}")).await;
+    assert_eq!(count(&held, "queued"), 3, "{held:#}");
+    assert!(
+        held["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["attempts"] == 0)
+    );
+
+    let (status, resumed) = post(&c, &format!("{url}/api/sweeps/{id}/resume"), &json!({})).await;
+    assert_eq!(
+        (status, resumed["state"].as_str()),
+        (StatusCode::OK, Some("active"))
+    );
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(30), finished).await;
+    assert_eq!(count(&done, "completed"), 3, "{done:#}");
+    pool.shutdown().await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancel_stops_running_cases_at_their_next_heartbeat() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let (status, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": long_base(), "grid": {"mu": [0.1, 0.2]}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED);
+    let id = s["id"].as_i64().unwrap();
+    // One worker: the first case runs (and reports progress), the second waits.
+    let running = wait_sweep(&c, &url, id, Duration::from_secs(30), |s| {
+        s["cases"][0]["status"] == "running" && s["cases"][0]["progress_detail"].is_object()
+    })
+    .await;
+    assert!(running["cases"][0]["progress"].as_f64().unwrap() > 0.0);
+    assert_eq!(running["cases"][1]["status"], "queued");
+    let cancelled_at = Instant::now();
+    let (status, cancelled) = post(&c, &format!("{url}/api/sweeps/{id}/cancel"), &json!({})).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(cancelled["status"], "cancelled");
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(15), |s| {
+        count(s, "cancelled") == 2
+    })
+    .await;
+    // Heartbeats come every lease / 3 (0.67 s here), the solver stops at its next sample.
+    assert!(
+        cancelled_at.elapsed() < Duration::from_secs(5),
+        "took {:?}",
+        cancelled_at.elapsed()
+    );
+    let ids = case_ids(&done);
+    let first = logs(&store, ids[0]).await;
+    assert!(
+        first.iter().any(|m| m.starts_with("cancel requested")),
+        "{first:?}"
+    );
+    assert!(
+        first.iter().any(|m| m.starts_with("cancelled while running")),
+        "{first:?}"
+    );
+    let second = logs(&store, ids[1]).await;
+    assert_eq!(claims(&second), 0, "{second:?}");
+    assert!(second.iter().any(|m| m.contains("before it ran")), "{second:?}");
+    // A cancelled sweep cannot be paused or resumed.
+    let (status, _) = post(&c, &format!("{url}/api/sweeps/{id}/resume"), &json!({})).await;
+    assert_eq!(status, StatusCode::CONFLICT);
+    let (status, _) = post(&c, &format!("{url}/api/sweeps/{id}/pause"), &json!({})).await;
+    assert_eq!(status, StatusCode::CONFLICT);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancelling_spares_cases_another_sweep_wants_and_resubmitting_requeues() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let spec = json!({"base": tiny_base(), "grid": {"mu": [0.5]}});
+    let (_, x) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
+    let (_, y) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
+    let (x, y) = (x["id"].as_i64().unwrap(), y["id"].as_i64().unwrap());
+    let (_, after_x) = post(&c, &format!("{url}/api/sweeps/{x}/cancel"), &json!({})).await;
+    assert_eq!(
+        after_x["cases"][0]["status"], "queued",
+        "sweep {y} still wants it"
+    );
+    let (_, after_y) = post(&c, &format!("{url}/api/sweeps/{y}/cancel"), &json!({})).await;
+    assert_eq!(after_y["cases"][0]["status"], "cancelled");
+    // A worker that dies while its case is being cancelled: when its lease
+    // expires the case ends cancelled instead of going back to the queue.
+    let (_, w) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": tiny_base(), "grid": {"mu": [0.55]}}),
+    )
+    .await;
+    let store = server.store();
+    let ghost = store
+        .claim("ghost", Duration::from_millis(200))
+        .await
+        .unwrap()
+        .expect("a case");
+    post(&c, &format!("{url}/api/sweeps/{}/cancel", w["id"]), &json!({})).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    store.requeue_expired().await.unwrap(); // (or the server's reaper did already)
+    let (_, ghost_case) = get(&c, &format!("{url}/api/cases/{}", ghost.lease.case_id)).await;
+    assert_eq!(ghost_case["status"], "cancelled", "{ghost_case:#}");
+    // Asking again queues the cancelled case again, and it runs.
+    let (status, z) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
+    assert_eq!(status, StatusCode::CREATED);
+    assert_eq!(z["cases"][0]["status"], "queued");
+    assert_eq!(z["cached"], 0);
+    let pool = WorkerPool::start(server.store(), pool_config(1));
+    let z = wait_sweep(
+        &c,
+        &url,
+        z["id"].as_i64().unwrap(),
+        Duration::from_secs(30),
+        finished,
+    )
+    .await;
+    assert_eq!(count(&z, "completed"), 1);
+    pool.shutdown().await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_dead_workers_case_is_finished_once_by_another_after_its_lease_expires() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let (_, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": tiny_base(), "grid": {"mu": [0.6]}}),
+    )
+    .await;
+    let id = s["id"].as_i64().unwrap();
+
+    // A worker claims the case and dies: no heartbeat, no release.
+    let ghost = store
+        .claim("ghost-worker", Duration::from_secs(1))
+        .await
+        .unwrap()
+        .expect("a case to claim");
+    assert_eq!(ghost.attempt, 1);
+    let (_, held) = get(&c, &format!("{url}/api/sweeps/{id}")).await;
+    assert_eq!(held["cases"][0]["status"], "running");
+
+    // Another worker takes it over once the lease has expired.
+    let pool = WorkerPool::start(server.store(), pool_config(1));
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(30), finished).await;
+    pool.shutdown().await;
+    assert_eq!(count(&done, "completed"), 1, "{done:#}");
+
+    // The ghost wakes up, really computes the case and tries to finish it:
+    // the fence refuses both its heartbeat and its result.
+    let params = ghost.params.clone();
+    let report = tokio::task::spawn_blocking(move || solver::protocol::run(&params, &mut |_| true))
+        .await
+        .unwrap();
+    assert_eq!(
+        store
+            .heartbeat(&ghost.lease, None, Duration::from_secs(1))
+            .await
+            .unwrap(),
+        Heartbeat::Lost
+    );
+    assert!(!store.complete(&ghost.lease, &report).await.unwrap());
+
+    let case_id = ghost.lease.case_id;
+    let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+    assert_eq!(case["attempts"], 2);
+    assert_ne!(case["result"]["worker"], "ghost-worker");
+    let messages = logs(&store, case_id).await;
+    assert_eq!(claims(&messages), 2, "{messages:?}");
+    assert_eq!(
+        messages
+            .iter()
+            .filter(|m| m.contains("ghost-worker expired"))
+            .count(),
+        1,
+        "{messages:?}"
+    );
+    assert_eq!(
+        messages.iter().filter(|m| m.starts_with("result")).count(),
+        1,
+        "{messages:?}"
+    );
+    let results: i64 = sqlx_count(&store, "SELECT COUNT(*) FROM results").await;
+    assert_eq!(results, 1);
+    server.shutdown().await.unwrap();
+}
+
+/// Raw SQL for checks the API does not expose.
+async fn sqlx_count(store: &SqliteStore, sql: &str) -> i64 {
+    sqlx::query_scalar(sql).fetch_one(store.pool()).await.expect(sql)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_server_restart_loses_no_accepted_sweep_or_finished_result() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    // Two short cases and a longer one (about a second), in that order.
+    let spec =
+        json!({"name": "restart", "base": tiny_base(), "grid": {"min_l_k_bar": [139.0, 138.5, 100.0]}});
+    let (status, s) = post_raw(
+        &c,
+        &format!("{url}/api/sweeps"),
+        spec.to_string(),
+        &[("idempotency-key", "restart-1")],
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED);
+    let id = s["id"].as_i64().unwrap();
+    let midway = wait_sweep(&c, &url, id, Duration::from_secs(30), |s| {
+        count(s, "queued") + count(s, "running") < 3 && s["cases"][2]["status"] == "running"
+    })
+    .await;
+    server.shutdown().await.unwrap();
+    let ids = case_ids(&midway);
+
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let (_, list) = get(&c, &format!("{url}/api/sweeps")).await;
+    assert_eq!(list[0]["id"], id);
+    assert_eq!(list[0]["name"], "restart");
+    // The idempotency key survives the restart too.
+    let (status, again) = post_raw(
+        &c,
+        &format!("{url}/api/sweeps"),
+        spec.to_string(),
+        &[("idempotency-key", "restart-1")],
+    )
+    .await;
+    assert_eq!((status, again["id"].as_i64()), (StatusCode::OK, Some(id)));
+    // Results finished before the restart are there, unchanged.
+    let mut before = Vec::new();
+    for case_id in &ids[..2] {
+        let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+        before.push(case["result"].clone());
+    }
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(60), finished).await;
+    for (case_id, result) in ids[..2].iter().zip(&before) {
+        let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+        if !result.is_null() {
+            assert_eq!(&case["result"], result);
+        }
+    }
+    assert!(
+        done["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["progress"] == 1.0),
+        "{done:#}"
+    );
+    // The case running at shutdown was released (its attempt not counted).
+    let messages = logs(&store, ids[2]).await;
+    assert!(
+        messages.iter().any(|m| m.starts_with("released by")),
+        "{messages:?}"
+    );
+    let (_, long_case) = get(&c, &format!("{url}/api/cases/{}", ids[2])).await;
+    assert_eq!(long_case["attempts"], 1, "{long_case:#}");
+    assert_eq!(sqlx_count(&store, "SELECT COUNT(*) FROM results").await, 3);
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_worker_processes_never_run_a_case_twice() {
+    const CASES: usize = 200;
+    let (dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let mus: Vec<Value> = (0..CASES)
+        .map(|i| serde_json::from_str(&format!("{:.2}", i as f64 / 100.0)).unwrap())
+        .collect();
+    let (status, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": tiny_base(), "grid": {"mu": mus}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{s}");
+    let id = s["id"].as_i64().unwrap();
+
+    // Four processes of two workers each: eight concurrent claimers.
+    let started = Instant::now();
+    let mut workers = Children(Vec::new());
+    for i in 0..4 {
+        let log = std::fs::File::create(dir.path().join(format!("worker-{i}.log"))).unwrap();
+        let child = Command::new(BIN)
+            .args([
+                "worker",
+                "--database-url",
+                &db,
+                "--workers",
+                "2",
+                "--lease-seconds",
+                "3",
+                "--poll-ms",
+                "20",
+            ])
+            .env("RUST_LOG", "warn")
+            .stdout(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .expect("spawn worker");
+        workers.0.push(child);
+    }
+    // One of them dies mid-sweep (SIGKILL: no release).
+    wait_sweep(&c, &url, id, Duration::from_secs(120), |s| {
+        s["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["progress"] == 1.0)
+            .count()
+            >= CASES / 4
+    })
+    .await;
+    workers.0[0].kill().unwrap();
+    workers.0[0].wait().unwrap();
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(180), finished).await;
+    let elapsed = started.elapsed();
+    for child in &workers.0[1..] {
+        signal(child, libc::SIGTERM);
+    }
+    for child in &mut workers.0[1..] {
+        let status = wait_exit(child, Duration::from_secs(20));
+        assert!(status.success(), "worker exited with {status}");
+    }
+
+    assert_eq!(
+        count(&done, "queued") + count(&done, "running") + count(&done, "failed"),
+        0,
+        "{:#}",
+        done["counts"]
+    );
+    assert_eq!(
+        sqlx_count(&store, "SELECT COUNT(*) FROM results").await,
+        CASES as i64
+    );
+    let mut total_claims = 0;
+    let mut takeovers = 0;
+    for case_id in case_ids(&done) {
+        let messages = logs(&store, case_id).await;
+        let claimed = claims(&messages);
+        let expired = messages.iter().filter(|m| m.contains("expired")).count();
+        let results = messages.iter().filter(|m| m.starts_with("result")).count();
+        assert_eq!(results, 1, "case {case_id}: {messages:?}");
+        // A second claim only ever follows the expiry of the first lease.
+        assert_eq!(claimed, 1 + expired, "case {case_id}: {messages:?}");
+        let mut holding = false;
+        for m in &messages {
+            if m.starts_with("claimed by") {
+                assert!(!holding, "case {case_id} handed out while held: {messages:?}");
+                holding = true;
+            } else if m.contains("expired") || m.starts_with("result") {
+                holding = false;
+            }
+        }
+        total_claims += claimed;
+        takeovers += expired;
+    }
+    let wall: f64 = sqlx_count(
+        &store,
+        "SELECT CAST(SUM(wall_time) * 1000 AS INTEGER) FROM results",
+    )
+    .await as f64
+        / 1000.0;
+    println!(
+        "{CASES} cases, 8 workers in 4 processes (one killed): {:.1} s, {total_claims} claims ({takeovers} after a lease expired), \
+         {:.1} cases/s, solver time {wall:.1} s",
+        elapsed.as_secs_f64(),
+        CASES as f64 / elapsed.as_secs_f64()
+    );
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_worker_process_releases_its_lease_on_sigterm() {
+    let (dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let store = server.store();
+    let (_, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": long_base(), "grid": {"mu": [0.3]}}),
+    )
+    .await;
+    let id = s["id"].as_i64().unwrap();
+    let log = std::fs::File::create(dir.path().join("worker.log")).unwrap();
+    let mut workers = Children(vec![
+        Command::new(BIN)
+            .args([
+                "worker",
+                "--database-url",
+                &db,
+                "--workers",
+                "1",
+                "--lease-seconds",
+                "60",
+            ])
+            .stdout(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .expect("spawn worker"),
+    ]);
+    let running = wait_sweep(&c, &url, id, Duration::from_secs(30), |s| {
+        count(s, "running") == 1
+    })
+    .await;
+    let case_id = case_ids(&running)[0];
+    let asked = Instant::now();
+    signal(&workers.0[0], libc::SIGTERM);
+    let status = wait_exit(&mut workers.0[0], Duration::from_secs(20));
+    assert!(status.success(), "{status}");
+    assert!(
+        asked.elapsed() < Duration::from_secs(10),
+        "took {:?}",
+        asked.elapsed()
+    );
+    // Queued again at once (not after the 60 s lease), the attempt not counted.
+    let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+    assert_eq!(case["status"], "queued", "{case:#}");
+    assert_eq!(case["attempts"], 0);
+    assert!(case["lease_owner"].is_null());
+    let messages = logs(&store, case_id).await;
+    assert!(
+        messages.iter().any(|m| m.starts_with("released by")),
+        "{messages:?}"
+    );
+    post(&c, &format!("{url}/api/sweeps/{id}/cancel"), &json!({})).await;
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_input_gets_a_4xx_with_the_field_and_the_reason() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    let many = |n: usize| (0..n).map(|i| json!(1e-3 + 1e-5 * i as f64)).collect::<Vec<_>>();
+    let cases: Vec<(String, StatusCode, &str)> = vec![
+        ("{not json".into(), StatusCode::BAD_REQUEST, "body"),
+        ("[1, 2]".into(), StatusCode::UNPROCESSABLE_ENTITY, "body"),
+        (
+            r#"{"colour": "red"}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "colour",
+        ),
+        (
+            r#"{"base": {"radius": 0.001}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.radius",
+        ),
+        (
+            r#"{"base": {"n": 2.5}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.n",
+        ),
+        (
+            r#"{"base": {"n": 0}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.n",
+        ),
+        (
+            r#"{"base": {"n": 9}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.n",
+        ),
+        (
+            r#"{"base": {"h": 0.02}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.h",
+        ),
+        (
+            r#"{"base": {"mu": -0.1}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.mu",
+        ),
+        (
+            r#"{"base": {"mu": "high"}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "base.mu",
+        ),
+        (r#"{"base": 3}"#.into(), StatusCode::UNPROCESSABLE_ENTITY, "base"),
+        (
+            r#"{"grid": {"h": [0.001, 0.05]}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid.h[1]",
+        ),
+        (
+            r#"{"grid": {"n": [1, 2, 9]}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid.n[2]",
+        ),
+        (
+            r#"{"grid": {"foo": [1]}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid.foo",
+        ),
+        (
+            r#"{"grid": {"mu": 0.1}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid.mu",
+        ),
+        (
+            r#"{"grid": {"mu": []}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid.mu",
+        ),
+        (
+            json!({"grid": {"h": many(40), "mu": many(30)}}).to_string(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid",
+        ),
+        (
+            r#"{"preset": "fig8"}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "preset",
+        ),
+        (
+            r#"{"preset": "fig7", "grid": {"n": [1]}}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "grid",
+        ),
+        (
+            json!({"name": "x".repeat(300)}).to_string(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "name",
+        ),
+        (
+            format!(r#"{{"name": "{}"}}"#, "x".repeat(70 * 1024)),
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "body",
+        ),
+        ("[".repeat(10_000), StatusCode::BAD_REQUEST, "body"),
+    ];
+    for (body, expected, field) in cases {
+        let (status, error) = post_raw(&c, &endpoint, body.clone(), &[]).await;
+        let shown = &body[..body.len().min(80)];
+        assert_eq!(status, expected, "{shown}: {error}");
+        let fields: Vec<&str> = error["fields"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["field"].as_str().unwrap())
+            .collect();
+        assert!(
+            fields.contains(&field),
+            "{shown}: expected field {field}, got {error}"
+        );
+        assert!(!error["message"].as_str().unwrap().is_empty());
+    }
+    let (status, error) = post_raw(&c, &endpoint, "{}", &[("idempotency-key", &"k".repeat(300))]).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert_eq!(error["fields"][0]["field"], "Idempotency-Key");
+    // Byte soup never gets a 5xx.
+    for seed in 0..50u64 {
+        let bytes: Vec<u8> = (0..(seed * 37 % 300))
+            .map(|i| ((i * 7919 + seed * 104_729) % 256) as u8)
+            .collect();
+        let (status, _) = post_raw(&c, &endpoint, bytes, &[]).await;
+        assert!(status.is_client_error(), "seed {seed}: {status}");
+    }
+    for (path, expected) in [
+        ("/api/sweeps/abc", StatusCode::BAD_REQUEST),
+        ("/api/sweeps/999", StatusCode::NOT_FOUND),
+        ("/api/sweeps/999/phase-diagram", StatusCode::NOT_FOUND),
+        ("/api/sweeps/999/events", StatusCode::NOT_FOUND),
+        ("/api/cases/999", StatusCode::NOT_FOUND),
+        ("/api/cases/999/series.csv", StatusCode::NOT_FOUND),
+        ("/api/cases/999/frames", StatusCode::NOT_FOUND),
+        ("/api/nothing", StatusCode::NOT_FOUND),
+    ] {
+        let (status, error) = get(&c, &format!("{url}{path}")).await;
+        assert_eq!(status, expected, "{path}: {error}");
+        assert!(error["error"].is_string(), "{path}: {error}");
+    }
+    let (status, _) = post(&c, &format!("{url}/api/sweeps/999/cancel"), &json!({})).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    let (_, list) = get(&c, &endpoint).await;
+    assert_eq!(list, json!([]), "bad input created nothing");
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_token_guards_every_mutating_request() {
+    let (_dir, db) = temp_db();
+    let mut cfg = config(&db, 0);
+    cfg.token = Some("s3cret".to_string());
+    let server = start(cfg).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    let r = c.post(&endpoint).json(&json!({})).send().await.unwrap();
+    assert_eq!(r.status(), StatusCode::UNAUTHORIZED);
+    assert_eq!(r.headers()["www-authenticate"], "Bearer");
+    let body: Value = r.json().await.unwrap();
+    assert_eq!(body["error"], "unauthorized");
+    let (status, _) = post_raw(&c, &endpoint, "{}", &[("authorization", "Bearer wrong")]).await;
+    assert_eq!(status, StatusCode::UNAUTHORIZED);
+    let (status, _) = post_raw(&c, &endpoint, "{}", &[("authorization", "s3cret")]).await;
+    assert_eq!(status, StatusCode::UNAUTHORIZED);
+    let (status, s) = post_raw(&c, &endpoint, "{}", &[("authorization", "Bearer s3cret")]).await;
+    assert_eq!(status, StatusCode::CREATED);
+    let id = s["id"].as_i64().unwrap();
+    let (status, _) = get(&c, &endpoint).await;
+    assert_eq!(status, StatusCode::OK, "reads need no token");
+    let (status, _) = post_raw(&c, &format!("{endpoint}/{id}/cancel"), "", &[]).await;
+    assert_eq!(status, StatusCode::UNAUTHORIZED);
+    let (status, body) = post_raw(
+        &c,
+        &format!("{endpoint}/{id}/cancel"),
+        "",
+        &[("authorization", "Bearer s3cret")],
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK, "{body}");
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cli_sweep_writes_the_phase_diagram_and_resumes_after_an_interruption() {
+    let (dir, db) = temp_db();
+    let spec_path = dir.path().join("spec.json");
+    let out = dir.path().join("out.json");
+    // Six cases, the later ones longer (about 0.1 s to 1 s each).
+    let grid: Vec<f64> = vec![139.0, 138.0, 136.0, 133.0, 129.0, 124.0];
+    std::fs::write(
+        &spec_path,
+        json!({"base": tiny_base(), "grid": {"min_l_k_bar": grid}}).to_string(),
+    )
+    .unwrap();
+    let sweep = |stderr: std::fs::File| {
+        Command::new(BIN)
+            .args(["sweep", "--spec"])
+            .arg(&spec_path)
+            .arg("--out")
+            .arg(&out)
+            .args(["--database-url", &db, "--workers", "1", "--lease-seconds", "5"])
+            .stdout(Stdio::null())
+            .stderr(stderr)
+            .spawn()
+            .expect("spawn sweep")
+    };
+    // First run: interrupted (SIGINT) after its first result.
+    let mut first = Children(vec![sweep(
+        std::fs::File::create(dir.path().join("run1.log")).unwrap(),
+    )]);
+    let store = loop {
+        // The CLI creates the database; wait for it.
+        match SqliteStore::connect(&db, SqliteOptions::default()).await {
+            Ok(s) => break Arc::new(s),
+            Err(_) => tokio::time::sleep(Duration::from_millis(50)).await,
+        }
+    };
+    let start = Instant::now();
+    while sqlx::query_scalar::<_, i64>("SELECT COUNT(*) FROM results")
+        .fetch_one(store.pool())
+        .await
+        .unwrap_or(0)
+        < 1
+    {
+        assert!(start.elapsed() < Duration::from_secs(60), "no result");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    signal(&first.0[0], libc::SIGINT);
+    let status = wait_exit(&mut first.0[0], Duration::from_secs(20));
+    let after_first = sqlx_count(&store, "SELECT COUNT(*) FROM results").await;
+    let first_results = sqlx_count(&store, "SELECT COALESCE(SUM(created_at), 0) FROM results").await;
+    let log = std::fs::read_to_string(dir.path().join("run1.log")).unwrap();
+    assert!(
+        !status.success() && log.contains("interrupted"),
+        "{status}: {log}"
+    );
+    assert!(after_first < grid.len() as i64);
+    assert!(!out.exists(), "no phase diagram for an unfinished sweep");
+    // Its lease was released: nothing is left running.
+    assert_eq!(
+        sqlx_count(&store, "SELECT COUNT(*) FROM cases WHERE status = 'running'").await,
+        0
+    );
+
+    // Second run: resumes the same sweep and finishes it.
+    let mut second = Children(vec![sweep(
+        std::fs::File::create(dir.path().join("run2.log")).unwrap(),
+    )]);
+    let status = wait_exit(&mut second.0[0], Duration::from_secs(120));
+    let log = std::fs::read_to_string(dir.path().join("run2.log")).unwrap();
+    assert!(status.success(), "{log}");
+    assert!(log.contains("resuming sweep 1"), "{log}");
+    let diagram: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(diagram["sweep_id"], 1);
+    assert_eq!(diagram["complete"], true);
+    assert_eq!(diagram["varied"], json!(["min_l_k_bar"]));
+    assert_eq!(diagram["points"].as_array().unwrap().len(), grid.len());
+    assert_eq!(sqlx_count(&store, "SELECT COUNT(*) FROM sweeps").await, 1);
+    assert_eq!(
+        sqlx_count(&store, "SELECT COUNT(*) FROM results").await,
+        grid.len() as i64
+    );
+    // The results of the first run were kept, not recomputed.
+    let kept = sqlx_count(
+        &store,
+        &format!("SELECT COALESCE(SUM(created_at), 0) FROM (SELECT created_at FROM results ORDER BY case_id LIMIT {after_first})"),
+    )
+    .await;
+    assert_eq!(kept, first_results);
+    store.close().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_pooled_sqlite_connection_has_wal_busy_timeout_and_foreign_keys() {
+    let (_dir, db) = temp_db();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
+    let mut held = Vec::new();
+    for _ in 0..4 {
+        held.push(store.pool().acquire().await.unwrap());
+    }
+    for conn in &mut held {
+        let mode: String = sqlx::query_scalar("PRAGMA journal_mode")
+            .fetch_one(&mut **conn)
+            .await
+            .unwrap();
+        let sync: i64 = sqlx::query_scalar("PRAGMA synchronous")
+            .fetch_one(&mut **conn)
+            .await
+            .unwrap();
+        let busy: i64 = sqlx::query_scalar("PRAGMA busy_timeout")
+            .fetch_one(&mut **conn)
+            .await
+            .unwrap();
+        let fk: i64 = sqlx::query_scalar("PRAGMA foreign_keys")
+            .fetch_one(&mut **conn)
+            .await
+            .unwrap();
+        assert_eq!((mode.as_str(), sync, busy, fk), ("wal", 1, 10_000, 1));
+    }
+    let orphan = sqlx::query("INSERT INTO sweep_cases (sweep_id, case_id, position) VALUES (42, 42, 0)")
+        .execute(&mut *held[0])
+        .await;
+    assert!(orphan.is_err(), "foreign keys are enforced");
+    drop(held);
+    store.close().await;
+}
+
+/// Measures the queue (not run by default: `cargo test --release --test
+/// service -- --ignored --nocapture queue_figures`): claims per second with
+/// eight concurrent claimers, and the queue's overhead per real case (claim
+/// to stored result, minus the solver's own time).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore]
+async fn queue_figures() {
+    use knotsweep_worker::store::{CreateOutcome, NewCase, NewSweep};
+    let (_dir, db) = temp_db();
+    let store = Arc::new(SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap());
+    // 2000 distinct queued cases (never run: claims only).
+    let cases: Vec<NewCase> = (0..2000)
+        .map(|i| {
+            NewCase::new(solver::case::CaseParams {
+                mu: i as f64 / 1000.0,
+                ..Default::default()
+            })
+        })
+        .collect();
+    let new = |cases: Vec<NewCase>| NewSweep {
+        name: None,
+        preset: None,
+        spec: json!({}),
+        varied: vec!["mu".to_string()],
+        cases,
+        idempotency: None,
+    };
+    let t = Instant::now();
+    let created = store.create_sweep(new(cases)).await.unwrap();
+    assert!(matches!(created, CreateOutcome::Created { .. }));
+    println!(
+        "enqueue 2000 cases in one sweep: {:.3} s",
+        t.elapsed().as_secs_f64()
+    );
+    let t = Instant::now();
+    let mut tasks = Vec::new();
+    for w in 0..8 {
+        let store = store.clone();
+        tasks.push(tokio::spawn(async move {
+            let mut n = 0;
+            while store
+                .claim(&format!("bench-{w}"), Duration::from_secs(600))
+                .await
+                .unwrap()
+                .is_some()
+            {
+                n += 1;
+            }
+            n
+        }));
+    }
+    let mut total = 0;
+    for task in tasks {
+        total += task.await.unwrap();
+    }
+    let secs = t.elapsed().as_secs_f64();
+    assert_eq!(total, 2000);
+    println!(
+        "8 concurrent claimers: {total} claims in {secs:.2} s = {:.0} claims/s",
+        total as f64 / secs
+    );
+
+    // Overhead per real case: one worker, 40 tiny cases back to back.
+    let (_dir2, db2) = temp_db();
+    let server = start(config(&db2, 0)).await;
+    let (url, c) = (server.url(), client());
+    let mus: Vec<Value> = (0..40).map(|i| json!(0.3 + i as f64 / 100.0)).collect();
+    let (_, s) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": tiny_base(), "grid": {"mu": mus}}),
+    )
+    .await;
+    let t = Instant::now();
+    let pool = WorkerPool::start(server.store(), pool_config(1));
+    wait_sweep(
+        &c,
+        &url,
+        s["id"].as_i64().unwrap(),
+        Duration::from_secs(120),
+        finished,
+    )
+    .await;
+    let elapsed = t.elapsed().as_secs_f64();
+    pool.shutdown().await;
+    let store2 = server.store();
+    let solver_ms = sqlx_count(
+        &store2,
+        "SELECT CAST(SUM(wall_time) * 1000 AS INTEGER) FROM results",
+    )
+    .await as f64;
+    let claim_to_done_ms = sqlx_count(
+        &store2,
+        "SELECT SUM(finished_at - started_at) FROM cases WHERE status = 'done'",
+    )
+    .await as f64;
+    println!(
+        "40 tiny cases on one worker: {elapsed:.2} s; solver {:.1} ms/case; claim-to-result {:.1} ms/case; \
+         queue overhead {:.1} ms/case (claim to stored result), {:.1} ms/case end to end",
+        solver_ms / 40.0,
+        claim_to_done_ms / 40.0,
+        (claim_to_done_ms - solver_ms) / 40.0,
+        (elapsed * 1000.0 - solver_ms) / 40.0
+    );
+    server.shutdown().await.unwrap();
+}

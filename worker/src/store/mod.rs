@@ -1,0 +1,418 @@
+//! The queue is the `cases` table; this trait is everything the server and the
+//! workers do with it. [`sqlite::SqliteStore`] implements it on SQLite; a
+//! PostgreSQL implementation (a later issue) implements the same trait with the
+//! same migrations (the SQL is portable: integer ids, times in Unix
+//! milliseconds, JSON as text) and `FOR UPDATE SKIP LOCKED` in the claim's
+//! sub-select.
+//!
+//! Queue invariants, whatever the backend:
+//! - a case is claimed by one statement that sets the lease (owner, expiry)
+//!   and increments the fencing counter; no transaction is open while the
+//!   solver computes;
+//! - heartbeats, completion, release and failure only touch the row when the
+//!   caller's (owner, fence) is the current lease: a worker that lost its lease
+//!   cannot complete the case;
+//! - an expired lease returns the case to the queue (with backoff) or, after
+//!   `max_attempts` claims, marks it `failed` with the reason;
+//! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
+pub mod sqlite;
+
+use async_trait::async_trait;
+use serde::{Deserialize, Serialize};
+use solver::case::CaseParams;
+use solver::measurements::Inversion;
+use solver::protocol::{CaseReport, Progress};
+use std::time::Duration;
+
+/// Errors of the store.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("database error: {0}")]
+    Database(#[from] sqlx::Error),
+    #[error("migration failed: {0}")]
+    Migrate(#[from] sqlx::migrate::MigrateError),
+    #[error("stored data is corrupt: {0}")]
+    Corrupt(String),
+    #[error("not found")]
+    NotFound,
+    #[error("{0}")]
+    Conflict(String),
+}
+
+pub type StoreResult<T> = Result<T, StoreError>;
+
+/// Retry policy for infrastructure failures (lost workers, panics, storage
+/// errors while completing): exponential backoff with jitter, at most
+/// `max_attempts` claims, then `failed`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RetryPolicy {
+    pub max_attempts: u32,
+    /// Backoff before attempt k+1 is `min(cap, base * 2^(k-1))`, of which a
+    /// random half is jitter.
+    pub base: Duration,
+    pub cap: Duration,
+}
+
+impl Default for RetryPolicy {
+    fn default() -> Self {
+        Self {
+            max_attempts: 3,
+            base: Duration::from_secs(1),
+            cap: Duration::from_secs(60),
+        }
+    }
+}
+
+impl RetryPolicy {
+    /// The delay before the next attempt after `attempts` failed ones.
+    pub fn backoff(&self, attempts: u32) -> Duration {
+        let exp = attempts.saturating_sub(1).min(30);
+        let full = self.base.saturating_mul(1u32 << exp).min(self.cap);
+        let half = full / 2;
+        half + half.mul_f64(rand::random::<f64>())
+    }
+}
+
+/// State of a sweep.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepState {
+    /// Its cases are handed out to workers.
+    Active,
+    /// Its queued cases are not handed out; running ones finish.
+    Paused,
+    /// Terminal: queued cases no other sweep wants are cancelled, running ones
+    /// stop at their next heartbeat.
+    Cancelled,
+}
+
+impl SweepState {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Active => "active",
+            Self::Paused => "paused",
+            Self::Cancelled => "cancelled",
+        }
+    }
+    pub fn parse(s: &str) -> StoreResult<Self> {
+        match s {
+            "active" => Ok(Self::Active),
+            "paused" => Ok(Self::Paused),
+            "cancelled" => Ok(Self::Cancelled),
+            other => Err(StoreError::Corrupt(format!("sweep state {other:?}"))),
+        }
+    }
+}
+
+/// Queue state of a case.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CaseState {
+    Queued,
+    Running,
+    /// Has a result (whatever the solver's status).
+    Done,
+    /// Infrastructure failures exhausted its attempts.
+    Failed,
+    Cancelled,
+}
+
+impl CaseState {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Queued => "queued",
+            Self::Running => "running",
+            Self::Done => "done",
+            Self::Failed => "failed",
+            Self::Cancelled => "cancelled",
+        }
+    }
+    pub fn parse(s: &str) -> StoreResult<Self> {
+        match s {
+            "queued" => Ok(Self::Queued),
+            "running" => Ok(Self::Running),
+            "done" => Ok(Self::Done),
+            "failed" => Ok(Self::Failed),
+            "cancelled" => Ok(Self::Cancelled),
+            other => Err(StoreError::Corrupt(format!("case status {other:?}"))),
+        }
+    }
+    pub fn is_terminal(self) -> bool {
+        matches!(self, Self::Done | Self::Failed | Self::Cancelled)
+    }
+}
+
+/// A case to enqueue: its parameters and key.
+#[derive(Clone, Debug)]
+pub struct NewCase {
+    pub key: String,
+    pub params: CaseParams,
+}
+
+impl NewCase {
+    pub fn new(params: CaseParams) -> Self {
+        Self {
+            key: crate::key::case_key(&params),
+            params,
+        }
+    }
+}
+
+/// A sweep to create.
+#[derive(Clone, Debug)]
+pub struct NewSweep {
+    pub name: Option<String>,
+    pub preset: Option<String>,
+    /// The accepted specification, stored as given.
+    pub spec: serde_json::Value,
+    /// Grid axes in order.
+    pub varied: Vec<String>,
+    /// The cases in grid order (distinct keys).
+    pub cases: Vec<NewCase>,
+    /// `Idempotency-Key` and a hash of the request it came with.
+    pub idempotency: Option<Idempotency>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Idempotency {
+    pub key: String,
+    pub request_hash: String,
+}
+
+/// A stored sweep.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRecord {
+    pub id: i64,
+    pub name: Option<String>,
+    pub preset: Option<String>,
+    pub spec: serde_json::Value,
+    pub varied: Vec<String>,
+    pub state: SweepState,
+    pub created_at: i64,
+    pub updated_at: i64,
+}
+
+/// What `create_sweep` did.
+#[derive(Clone, Debug)]
+pub enum CreateOutcome {
+    /// A new sweep; `cached` of its cases already had a result.
+    Created { sweep: SweepRecord, cached: usize },
+    /// The idempotency key was seen with the same request: the first sweep.
+    Replayed { sweep: SweepRecord },
+}
+
+/// A case row with its result summary (no series or frames).
+#[derive(Clone, Debug)]
+pub struct CaseRecord {
+    pub id: i64,
+    pub key: String,
+    pub solver_version: String,
+    pub params: CaseParams,
+    pub state: CaseState,
+    pub attempts: u32,
+    pub max_attempts: u32,
+    pub not_before: i64,
+    pub lease_owner: Option<String>,
+    pub lease_expires_at: Option<i64>,
+    pub fence: i64,
+    pub progress: f64,
+    pub progress_detail: Option<Progress>,
+    pub cancel_requested: bool,
+    pub last_error: Option<String>,
+    pub created_at: i64,
+    pub started_at: Option<i64>,
+    pub finished_at: Option<i64>,
+    pub result: Option<ResultSummary>,
+}
+
+impl CaseRecord {
+    /// The one status word of the API: the solver's status when the case has a
+    /// result, otherwise the queue state.
+    pub fn status(&self) -> &str {
+        match &self.result {
+            Some(r) => &r.outcome,
+            None => self.state.as_str(),
+        }
+    }
+}
+
+/// The small part of a result.
+#[derive(Clone, Debug)]
+pub struct ResultSummary {
+    /// The solver's status (snake_case).
+    pub outcome: String,
+    pub reason: String,
+    pub inversion: Option<Inversion>,
+    /// Determinants and stats (JSON object).
+    pub summary: serde_json::Value,
+    pub wall_time: f64,
+    pub worker: String,
+    pub created_at: i64,
+}
+
+/// A case as a member of a sweep.
+#[derive(Clone, Debug)]
+pub struct SweepCase {
+    pub position: i64,
+    /// The result existed when the sweep was submitted.
+    pub cached: bool,
+    pub case: CaseRecord,
+}
+
+/// A per-case log line.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct LogLine {
+    /// Unix milliseconds.
+    pub at: i64,
+    pub level: String,
+    pub message: String,
+}
+
+/// A held lease: only its holder (owner and fence) may heartbeat, complete,
+/// fail or release the case.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Lease {
+    pub case_id: i64,
+    pub owner: String,
+    pub fence: i64,
+}
+
+/// A claimed case.
+#[derive(Clone, Debug)]
+pub struct Claim {
+    pub lease: Lease,
+    pub key: String,
+    pub params: CaseParams,
+    /// 1 for the first claim.
+    pub attempt: u32,
+}
+
+/// What a heartbeat found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Heartbeat {
+    /// Still ours (lease extended); `cancel`: every sweep that wants the case
+    /// was cancelled, stop computing.
+    Held { cancel: bool },
+    /// Someone else holds the case now (or it is no longer running).
+    Lost,
+}
+
+/// What `fail_attempt` did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailOutcome {
+    /// Back in the queue, not before the backoff.
+    Retry { after: Duration },
+    /// Out of attempts: `failed`.
+    Failed,
+    /// The lease was no longer ours.
+    Lost,
+}
+
+/// Pause, resume or cancel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepAction {
+    Pause,
+    Resume,
+    Cancel,
+}
+
+/// Count of cases per status word (see [`CaseRecord::status`]).
+pub type StatusCounts = Vec<(String, i64)>;
+
+/// Everything done with the queue. Every method is short: no transaction stays
+/// open across calls, and none across a computation.
+#[async_trait]
+pub trait Store: Send + Sync + 'static {
+    // --- sweeps (the API) ---
+
+    /// Creates a sweep and enqueues its cases (dedup by key: a case already
+    /// done is linked as cached; one that failed or was cancelled is queued
+    /// again). With an idempotency key seen before: the first sweep when the
+    /// request hash matches, `Conflict` otherwise. One IMMEDIATE transaction.
+    async fn create_sweep(&self, sweep: NewSweep) -> StoreResult<CreateOutcome>;
+    async fn list_sweeps(&self) -> StoreResult<Vec<SweepRecord>>;
+    async fn get_sweep(&self, id: i64) -> StoreResult<Option<SweepRecord>>;
+    /// Per-sweep counts by status word, for every sweep.
+    async fn sweep_status_counts(&self) -> StoreResult<Vec<(i64, String, i64)>>;
+    /// The sweep's cases in grid order, with result summaries.
+    async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>>;
+    /// Pause, resume or cancel. `NotFound` for an unknown sweep, `Conflict`
+    /// for pausing or resuming a cancelled one.
+    async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord>;
+
+    // --- cases (the API) ---
+
+    async fn get_case(&self, id: i64) -> StoreResult<Option<CaseRecord>>;
+    /// Ids of the sweeps that asked for a case.
+    async fn case_sweeps(&self, id: i64) -> StoreResult<Vec<i64>>;
+    /// The series of a case's result as stored (JSON array of samples).
+    async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>>;
+    /// The frames of a case's result as stored (JSON array of frames).
+    async fn case_frames_json(&self, id: i64) -> StoreResult<Option<String>>;
+    async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>>;
+    async fn append_log(&self, case_id: i64, level: &str, message: &str) -> StoreResult<()>;
+
+    // --- the queue (the workers) ---
+
+    /// Returns cases whose lease expired to the queue (with backoff) or marks
+    /// them failed when out of attempts. Returns how many it touched.
+    async fn requeue_expired(&self) -> StoreResult<usize>;
+    /// Claims the oldest queued case of an active sweep whose backoff has
+    /// passed, in one UPDATE ... RETURNING statement.
+    async fn claim(&self, owner: &str, lease: Duration) -> StoreResult<Option<Claim>>;
+    /// Extends the lease, stores progress and reads the cancel flag.
+    async fn heartbeat(
+        &self,
+        lease: &Lease,
+        progress: Option<&Progress>,
+        extend: Duration,
+    ) -> StoreResult<Heartbeat>;
+    /// Stores the result and marks the case done, if `lease` is current;
+    /// `Ok(false)` otherwise (nothing written). `report.status` must not be
+    /// `cancelled`.
+    async fn complete(&self, lease: &Lease, report: &CaseReport) -> StoreResult<bool>;
+    /// A retryable failure of this attempt (not a solver failure).
+    async fn fail_attempt(&self, lease: &Lease, reason: &str) -> StoreResult<FailOutcome>;
+    /// Gives the case back (shutdown): queued at once, the attempt not counted.
+    async fn release(&self, lease: &Lease) -> StoreResult<bool>;
+    /// The solver stopped on a cancel request: `cancelled`, or queued again if a
+    /// sweep asked for the case in the meantime.
+    async fn finish_cancelled(&self, lease: &Lease) -> StoreResult<bool>;
+
+    // --- metrics ---
+
+    /// Count of all cases by status word.
+    async fn status_counts(&self) -> StoreResult<StatusCounts>;
+    /// Queued cases of active sweeps whose backoff has passed.
+    async fn queue_depth(&self) -> StoreResult<i64>;
+}
+
+/// Milliseconds since the Unix epoch.
+pub fn now_ms() -> i64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_millis() as i64)
+        .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backoff_grows_exponentially_with_jitter_and_is_capped() {
+        let p = RetryPolicy {
+            max_attempts: 10,
+            base: Duration::from_millis(100),
+            cap: Duration::from_secs(1),
+        };
+        for attempts in 1..8 {
+            let full = Duration::from_millis(100 * (1 << (attempts - 1))).min(Duration::from_secs(1));
+            for _ in 0..20 {
+                let d = p.backoff(attempts);
+                assert!(d >= full / 2 && d <= full, "{attempts}: {d:?}");
+            }
+        }
+    }
+}

@@ -129,7 +129,8 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::write(&args.out, serde_json::to_string(&report)?)
         .with_context(|| format!("writing {}", args.out.display()))?;
     if let Some(path) = &args.csv {
-        std::fs::write(path, series_csv(&report)).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(path, solver::measurements::series_csv(&report.series))
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(dir) = &args.plot {
         write_plots(&report, dir)?;
@@ -189,30 +190,4 @@ fn summarise(report: &CaseReport) {
         s.contact_time,
         s.dynamics_time
     );
-}
-
-/// The series as CSV, one row per sample.
-pub fn series_csv(report: &CaseReport) -> String {
-    let mut out = String::from(
-        "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations\n",
-    );
-    for s in &report.series {
-        out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            s.time,
-            s.l_k_bar,
-            s.l_c_over_l,
-            s.force,
-            s.f_bar,
-            s.width,
-            s.height,
-            s.h_bar,
-            s.kinetic_energy,
-            s.contacts,
-            s.active_contacts,
-            s.max_penetration,
-            s.newton_iterations
-        ));
-    }
-    out
 }

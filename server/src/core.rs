@@ -318,7 +318,7 @@ impl Core {
             .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))?;
         let series: Vec<Sample> = serde_json::from_str(&text)
             .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
-        Ok(series_csv(&series))
+        Ok(solver::measurements::series_csv(&series))
     }
 
     /// The frames (centreline snapshots) as stored JSON; 404 before the result.
@@ -388,33 +388,6 @@ impl Core {
         }
         Ok(out)
     }
-}
-
-/// The series as CSV, one row per sample (the columns of `knotsweep run --csv`).
-pub fn series_csv(series: &[Sample]) -> String {
-    let mut out = String::from(
-        "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations\n",
-    );
-    for s in series {
-        let _ = writeln!(
-            out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            s.time,
-            s.l_k_bar,
-            s.l_c_over_l,
-            s.force,
-            s.f_bar,
-            s.width,
-            s.height,
-            s.h_bar,
-            s.kinetic_energy,
-            s.contacts,
-            s.active_contacts,
-            s.max_penetration,
-            s.newton_iterations
-        );
-    }
-    out
 }
 
 fn progress_of(c: &CaseRecord) -> Option<CaseProgress> {

@@ -46,6 +46,33 @@ pub struct Sample {
     pub newton_iterations: u32,
 }
 
+/// Header of the series CSV, one column per `Sample` field.
+pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations";
+
+/// The series as CSV text (header, then one row per sample).
+pub fn series_csv(series: &[Sample]) -> String {
+    let mut out = format!("{CSV_HEADER}\n");
+    for s in series {
+        out.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            s.time,
+            s.l_k_bar,
+            s.l_c_over_l,
+            s.force,
+            s.f_bar,
+            s.width,
+            s.height,
+            s.h_bar,
+            s.kinetic_energy,
+            s.contacts,
+            s.active_contacts,
+            s.max_penetration,
+            s.newton_iterations
+        ));
+    }
+    out
+}
+
 /// The loop between the braid ends.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LoopGeometry {
@@ -240,6 +267,15 @@ mod tests {
             "{} vs {expected}",
             g.height
         );
+    }
+
+    #[test]
+    fn csv_has_one_row_per_sample_and_every_column() {
+        let csv = series_csv(&[Sample::default(), Sample::default()]);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 3);
+        let columns = CSV_HEADER.split(',').count();
+        assert!(lines.iter().all(|l| l.split(',').count() == columns));
     }
 
     #[test]

@@ -7,6 +7,35 @@ use crate::material::Material;
 use crate::rod::{Rod, node_dof, theta_dof};
 use nalgebra::{DMatrix, Rotation3, Vector3};
 
+/// Each energy alone and their sum, as checked by the derivative tests.
+pub const TERM_SETS: [(&str, Terms); 4] = [
+    (
+        "stretching",
+        Terms {
+            stretching: true,
+            bending: false,
+            twisting: false,
+        },
+    ),
+    (
+        "bending",
+        Terms {
+            stretching: false,
+            bending: true,
+            twisting: false,
+        },
+    ),
+    (
+        "twisting",
+        Terms {
+            stretching: false,
+            bending: false,
+            twisting: true,
+        },
+    ),
+    ("total", Terms::ALL),
+];
+
 /// A bent, stretched and twisted rod of 9 nodes with random perturbations: a
 /// non-trivial configuration for the derivative checks (frames rebased on it).
 pub fn sample_rod(seed: u64) -> Rod {
@@ -132,37 +161,10 @@ pub fn rigid_motion_errors(seed: u64) -> (f64, f64, f64) {
 mod tests {
     use super::*;
 
-    const SINGLE: [(&str, Terms); 3] = [
-        (
-            "stretching",
-            Terms {
-                stretching: true,
-                bending: false,
-                twisting: false,
-            },
-        ),
-        (
-            "bending",
-            Terms {
-                stretching: false,
-                bending: true,
-                twisting: false,
-            },
-        ),
-        (
-            "twisting",
-            Terms {
-                stretching: false,
-                bending: false,
-                twisting: true,
-            },
-        ),
-    ];
-
     #[test]
     fn gradients_match_finite_differences() {
         for seed in 0..4 {
-            for (name, terms) in SINGLE.into_iter().chain([("total", Terms::ALL)]) {
+            for (name, terms) in TERM_SETS {
                 let mut rod = sample_rod(seed);
                 let err = gradient_error(&mut rod, terms);
                 assert!(err <= 1e-6, "{name} gradient, seed {seed}: {err:e}");
@@ -173,7 +175,7 @@ mod tests {
     #[test]
     fn hessians_match_symmetrised_finite_differences() {
         for seed in 0..4 {
-            for (name, terms) in SINGLE.into_iter().chain([("total", Terms::ALL)]) {
+            for (name, terms) in TERM_SETS {
                 let mut rod = sample_rod(seed);
                 let err = hessian_error(&mut rod, terms);
                 assert!(err <= 1e-6, "{name} Hessian, seed {seed}: {err:e}");

@@ -8,7 +8,6 @@ pub mod elastica;
 pub mod rng;
 pub mod statics;
 
-use crate::energies::Terms;
 use serde::{Deserialize, Serialize};
 
 /// One row of the validation table.
@@ -255,35 +254,8 @@ pub fn rod_cases() -> Vec<Case> {
 }
 
 fn derivative_rows() -> Vec<CaseResult> {
-    let terms = [
-        (
-            "stretching",
-            Terms {
-                stretching: true,
-                bending: false,
-                twisting: false,
-            },
-        ),
-        (
-            "bending",
-            Terms {
-                stretching: false,
-                bending: true,
-                twisting: false,
-            },
-        ),
-        (
-            "twisting",
-            Terms {
-                stretching: false,
-                bending: false,
-                twisting: true,
-            },
-        ),
-        ("total", Terms::ALL),
-    ];
     let mut rows = Vec::new();
-    for (name, t) in terms {
+    for (name, t) in derivatives::TERM_SETS {
         let mut worst_g: f64 = 0.0;
         let mut worst_h: f64 = 0.0;
         for seed in 0..4 {

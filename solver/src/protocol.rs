@@ -182,6 +182,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
 
     // Relaxation with the ends held.
     let relax_steps = (params.relax_time / params.dt).round() as u64;
+    let mut grad = vec![0.0; world.rods[0].ndof()];
     for _ in 0..relax_steps {
         if let Err(e) = world.step(params.dt) {
             return finish(
@@ -194,9 +195,8 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         }
         report.stats.relax_steps += 1;
         let ke = world.rods[0].kinetic_energy();
-        let mut g = vec![0.0; world.rods[0].ndof()];
         let elastic =
-            crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut g, None).total();
+            crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut grad, None).total();
         if ke <= params.relax_tolerance * elastic {
             break;
         }

@@ -1,6 +1,7 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
 mod plot;
+mod queue_args;
 mod reproduce;
 mod run;
 mod serve;

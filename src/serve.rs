@@ -1,24 +1,17 @@
 //! `knotsweep serve`: the sweep service (HTTP API, embedded workers) on a
 //! local SQLite database.
 use anyhow::{Context, Result};
-use knotsweep_server::{DEFAULT_ADDR, DEFAULT_DATABASE_URL, Limits, ServerConfig};
+use knotsweep_server::{DEFAULT_ADDR, Limits, ServerConfig};
 use knotsweep_worker::store::RetryPolicy;
 use std::time::Duration;
 
 #[derive(clap::Args)]
 pub struct Args {
+    #[command(flatten)]
+    queue: crate::queue_args::QueueArgs,
     /// Address to listen on (port 0: any free port).
     #[arg(long, default_value = DEFAULT_ADDR)]
     addr: String,
-    /// Database: `sqlite://PATH` (created if missing).
-    #[arg(long, default_value = DEFAULT_DATABASE_URL)]
-    database_url: String,
-    /// Embedded worker slots [default: one per core]; 0: none (run `knotsweep worker`).
-    #[arg(long)]
-    workers: Option<usize>,
-    /// Lease length (s) of the embedded workers; they heartbeat every third of it.
-    #[arg(long, default_value_t = 30.0)]
-    lease_seconds: f64,
     /// Claims of a case before it is marked failed (lost workers, panics).
     #[arg(long, default_value_t = 3)]
     max_attempts: u32,
@@ -38,9 +31,9 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("listening on {}", args.addr))?;
         let token = std::env::var("KNOTSWEEP_TOKEN").ok().filter(|t| !t.is_empty());
         let config = ServerConfig {
-            database_url: args.database_url.clone(),
-            workers: args.workers,
-            lease: Duration::from_secs_f64(args.lease_seconds.max(0.1)),
+            database_url: args.queue.database_url.clone(),
+            workers: args.queue.workers,
+            lease: Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)),
             retry: RetryPolicy {
                 max_attempts: args.max_attempts.max(1),
                 ..RetryPolicy::default()
@@ -54,13 +47,14 @@ pub fn run(args: Args) -> Result<()> {
             ..ServerConfig::default()
         };
         let workers = args
+            .queue
             .workers
             .unwrap_or_else(knotsweep_worker::pool::default_workers);
         let server = knotsweep_server::start(config, listener).await?;
         let url = server.url();
         println!(
             "knotsweep serving on {url} (API docs {url}/api/docs; database {}; {workers} embedded workers{})",
-            args.database_url,
+            args.queue.database_url,
             if token.is_some() {
                 "; POST requests need the bearer token"
             } else {

@@ -7,7 +7,7 @@
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::views::SweepStatus;
-use knotsweep_server::{Core, DEFAULT_DATABASE_URL, Limits};
+use knotsweep_server::{Core, Limits};
 use knotsweep_worker::store::SweepAction;
 use knotsweep_worker::{PoolConfig, Store, WorkerPool};
 use serde_json::Value;
@@ -17,6 +17,8 @@ use std::time::Duration;
 
 #[derive(clap::Args)]
 pub struct Args {
+    #[command(flatten)]
+    queue: crate::queue_args::QueueArgs,
     /// A preset: fig7, fig9 or fig11 (see `GET /api/presets`).
     #[arg(long, conflicts_with = "spec", required_unless_present = "spec")]
     preset: Option<String>,
@@ -29,15 +31,6 @@ pub struct Args {
     /// Phase-diagram JSON output [default: <preset or spec file name>.json].
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Database: `sqlite://PATH` (shared with `knotsweep serve`: results are reused).
-    #[arg(long, default_value = DEFAULT_DATABASE_URL)]
-    database_url: String,
-    /// Concurrent cases [default: one per core].
-    #[arg(long)]
-    workers: Option<usize>,
-    /// Lease length (s).
-    #[arg(long, default_value_t = 30.0)]
-    lease_seconds: f64,
 }
 
 fn build_spec(args: &Args) -> Result<Value> {
@@ -89,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
     let out = args.out.clone().unwrap_or_else(|| default_out(&args));
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async move {
-        let store = crate::worker::open_store(&args.database_url).await?;
+        let store = crate::worker::open_store(&args.queue.database_url).await?;
         let dyn_store: Arc<dyn Store> = store.clone();
         let core = Core::new(dyn_store.clone(), Limits::default(), None);
         // Same specification, same key: a rerun finds the first sweep.
@@ -121,12 +114,12 @@ pub fn run(args: Args) -> Result<()> {
                 "sweep {id}: {} cases ({} reused from earlier results), database {}",
                 submitted.sweep.cases.len(),
                 submitted.sweep.cached,
-                args.database_url
+                args.queue.database_url
             );
         }
         let total = submitted.sweep.cases.len() as u64;
-        let mut config = PoolConfig::new(args.workers.unwrap_or(0))
-            .with_lease(Duration::from_secs_f64(args.lease_seconds.max(0.1)));
+        let mut config = PoolConfig::new(args.queue.workers.unwrap_or(0))
+            .with_lease(Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)));
         config.poll = Duration::from_millis(100);
         let pool = WorkerPool::start(dyn_store.clone(), config);
         let bar = ProgressBar::new(total * 100).with_style(

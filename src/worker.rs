@@ -3,7 +3,6 @@
 //! it stops claiming, releases its leases (the cases are queued again at
 //! once) and exits.
 use anyhow::{Context, Result};
-use knotsweep_server::DEFAULT_DATABASE_URL;
 use knotsweep_worker::store::RetryPolicy;
 use knotsweep_worker::store::sqlite::{SqliteOptions, SqliteStore};
 use knotsweep_worker::{PoolConfig, Store, WorkerPool};
@@ -12,15 +11,8 @@ use std::time::Duration;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Database: `sqlite://PATH` (the server's).
-    #[arg(long, default_value = DEFAULT_DATABASE_URL)]
-    database_url: String,
-    /// Concurrent cases [default: one per core].
-    #[arg(long)]
-    workers: Option<usize>,
-    /// Lease length (s); heartbeats every third of it.
-    #[arg(long, default_value_t = 30.0)]
-    lease_seconds: f64,
+    #[command(flatten)]
+    queue: crate::queue_args::QueueArgs,
     /// Idle poll interval (ms).
     #[arg(long, default_value_t = 250)]
     poll_ms: u64,
@@ -64,9 +56,9 @@ pub async fn open_store(url: &str) -> Result<Arc<SqliteStore>> {
 pub fn run(args: Args) -> Result<()> {
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async {
-        let store = open_store(&args.database_url).await?;
-        let mut config = PoolConfig::new(args.workers.unwrap_or(0))
-            .with_lease(Duration::from_secs_f64(args.lease_seconds.max(0.1)));
+        let store = open_store(&args.queue.database_url).await?;
+        let mut config = PoolConfig::new(args.queue.workers.unwrap_or(0))
+            .with_lease(Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)));
         config.poll = Duration::from_millis(args.poll_ms.max(1));
         let name = config.name.clone();
         let workers = config.workers;
@@ -74,7 +66,7 @@ pub fn run(args: Args) -> Result<()> {
         let pool = WorkerPool::start(dyn_store, config);
         println!(
             "knotsweep worker {name}: {workers} workers on {}",
-            args.database_url
+            args.queue.database_url
         );
         shutdown_signal().await;
         tracing::info!("stopping: no new claims, releasing leases");

@@ -303,14 +303,12 @@ async fn pause_holds_queued_cases_and_resume_releases_them() {
     let (_dir, db) = temp_db();
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
-    let (status, s) = post(
+    let id = submit_sweep(
         &c,
-        &format!("{url}/api/sweeps"),
+        &url,
         &json!({"base": tiny_base(), "grid": {"mu": [0.11, 0.12, 0.13]}}),
     )
     .await;
-    assert_eq!(status, StatusCode::CREATED);
-    let id = s["id"].as_i64().unwrap();
     let (status, paused) = post(&c, &format!("{url}/api/sweeps/{id}/pause"), &json!({})).await;
     assert_eq!(status, StatusCode::OK);
     assert_eq!(
@@ -348,14 +346,12 @@ async fn cancel_stops_running_cases_at_their_next_heartbeat() {
     let server = start(config(&db, 1)).await;
     let (url, c) = (server.url(), client());
     let store = server.store();
-    let (status, s) = post(
+    let id = submit_sweep(
         &c,
-        &format!("{url}/api/sweeps"),
+        &url,
         &json!({"base": long_base(), "grid": {"mu": [0.1, 0.2]}}),
     )
     .await;
-    assert_eq!(status, StatusCode::CREATED);
-    let id = s["id"].as_i64().unwrap();
     // One worker: the first case runs (and reports progress), the second waits.
     let running = wait_sweep(&c, &url, id, Duration::from_secs(30), |s| {
         s["cases"][0]["status"] == "running" && s["cases"][0]["progress_detail"].is_object()
@@ -458,13 +454,7 @@ async fn a_dead_workers_case_is_finished_once_by_another_after_its_lease_expires
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
     let store = server.store();
-    let (_, s) = post(
-        &c,
-        &format!("{url}/api/sweeps"),
-        &json!({"base": tiny_base(), "grid": {"mu": [0.6]}}),
-    )
-    .await;
-    let id = s["id"].as_i64().unwrap();
+    let id = submit_sweep(&c, &url, &json!({"base": tiny_base(), "grid": {"mu": [0.6]}})).await;
 
     // A worker claims the case and dies: no heartbeat, no release.
     let ghost = store
@@ -608,14 +598,7 @@ async fn concurrent_worker_processes_never_run_a_case_twice() {
     let mus: Vec<Value> = (0..CASES)
         .map(|i| serde_json::from_str(&format!("{:.2}", i as f64 / 100.0)).unwrap())
         .collect();
-    let (status, s) = post(
-        &c,
-        &format!("{url}/api/sweeps"),
-        &json!({"base": tiny_base(), "grid": {"mu": mus}}),
-    )
-    .await;
-    assert_eq!(status, StatusCode::CREATED, "{s}");
-    let id = s["id"].as_i64().unwrap();
+    let id = submit_sweep(&c, &url, &json!({"base": tiny_base(), "grid": {"mu": mus}})).await;
 
     // Four processes of two workers each: eight concurrent claimers.
     let started = Instant::now();
@@ -717,13 +700,7 @@ async fn a_worker_process_releases_its_lease_on_sigterm() {
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
     let store = server.store();
-    let (_, s) = post(
-        &c,
-        &format!("{url}/api/sweeps"),
-        &json!({"base": long_base(), "grid": {"mu": [0.3]}}),
-    )
-    .await;
-    let id = s["id"].as_i64().unwrap();
+    let id = submit_sweep(&c, &url, &json!({"base": long_base(), "grid": {"mu": [0.3]}})).await;
     let log = std::fs::File::create(dir.path().join("worker.log")).unwrap();
     let mut workers = Children(vec![
         Command::new(BIN)

@@ -79,6 +79,13 @@ pub async fn post(client: &reqwest::Client, url: &str, body: &Value) -> (StatusC
     (status, r.json().await.unwrap_or(Value::Null))
 }
 
+/// Submits a sweep, asserts that it was created and returns its id.
+pub async fn submit_sweep(client: &reqwest::Client, url: &str, body: &Value) -> i64 {
+    let (status, sweep) = post(client, &format!("{url}/api/sweeps"), body).await;
+    assert_eq!(status, StatusCode::CREATED, "{sweep}");
+    sweep["id"].as_i64().expect("sweep id")
+}
+
 pub async fn post_raw(
     client: &reqwest::Client,
     url: &str,

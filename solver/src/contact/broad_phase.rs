@@ -74,6 +74,21 @@ pub enum BroadPhaseError {
     InvalidMargin(f64),
 }
 
+/// The segments of one rod's polyline `nodes` (body `body`, indices in order).
+pub fn polyline_segments(nodes: &[Vector3<f64>], radius: f64, body: usize) -> Vec<Segment> {
+    nodes
+        .windows(2)
+        .enumerate()
+        .map(|(index, w)| Segment {
+            a: w[0],
+            b: w[1],
+            radius,
+            body,
+            index,
+        })
+        .collect()
+}
+
 /// Index gap below which two segments of one rod are never in contact:
 /// `ceil(contact_distance / edge_length) + 1`, i.e. segments closer in arc
 /// length than the contact distance plus one edge.
@@ -326,20 +341,6 @@ pub(crate) mod tests {
     }
 
     /// Segments of one polyline as body `body`, global order preserved.
-    pub(crate) fn polyline_segments(nodes: &[Vector3<f64>], radius: f64, body: usize) -> Vec<Segment> {
-        nodes
-            .windows(2)
-            .enumerate()
-            .map(|(index, w)| Segment {
-                a: w[0],
-                b: w[1],
-                radius,
-                body,
-                index,
-            })
-            .collect()
-    }
-
     fn check_same_as_brute_force(segments: &[Segment], gaps: &[usize], margin: f64) -> usize {
         let mut bp = BroadPhase::new();
         let fast = bp.find_pairs(segments, gaps, margin).unwrap().to_vec();

@@ -374,7 +374,8 @@ fn validate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::broad_phase::tests::{polyline_segments, torus_knot};
+    use crate::contact::broad_phase::polyline_segments;
+    use crate::contact::broad_phase::tests::torus_knot;
     use crate::contact::broad_phase::{BroadPhase, neighbour_gap};
     use crate::contact::cone::{solve_isotropic, tangential};
     use crate::contact::segment::closest_points;

@@ -12,7 +12,7 @@
 //! gap `> ceil(2h / edge) + 1`) is at least `2h` apart.
 use super::geometry::{Braid, Dense, Plan, loop_drift, sinc};
 use super::topology::{TopologyError, expected_determinant, knot_determinant};
-use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
+use crate::contact::broad_phase::{BroadPhase, neighbour_gap, polyline_segments};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -676,17 +676,7 @@ fn equal_chords(
 
 /// Fails if two non-neighbouring segments are closer than `2h`.
 fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), KnotError> {
-    let segments: Vec<Segment> = points
-        .windows(2)
-        .enumerate()
-        .map(|(index, w)| Segment {
-            a: w[0],
-            b: w[1],
-            radius: h,
-            body: 0,
-            index,
-        })
-        .collect();
+    let segments = polyline_segments(points, h, 0);
     let mut broad = BroadPhase::new();
     let gap = neighbour_gap(2.0 * h, edge);
     let pairs = broad.find_pairs(&segments, &[gap], 0.0).expect("valid segments");

@@ -319,7 +319,7 @@ pub fn interpenetration_recovery() -> Result<(f64, f64), WorldError> {
 /// Broad phase against brute force on a tight (2,7) torus-knot polyline of 301
 /// nodes (h = 1.6 mm): returns (pairs found, brute-force pairs, mismatches).
 pub fn broad_phase_vs_brute_force() -> (usize, usize, usize) {
-    use crate::contact::broad_phase::{BroadPhase, Segment, brute_force, neighbour_gap};
+    use crate::contact::broad_phase::{BroadPhase, brute_force, neighbour_gap, polyline_segments};
     let k = 301;
     let h = 1.6e-3;
     let points: Vec<Vector3<f64>> = (0..k)
@@ -329,17 +329,7 @@ pub fn broad_phase_vs_brute_force() -> (usize, usize, usize) {
             Vector3::new(r * (2.0 * t).cos(), r * (2.0 * t).sin(), 0.004 * (3.5 * t).sin())
         })
         .collect();
-    let segments: Vec<Segment> = points
-        .windows(2)
-        .enumerate()
-        .map(|(index, w)| Segment {
-            a: w[0],
-            b: w[1],
-            radius: h,
-            body: 0,
-            index,
-        })
-        .collect();
+    let segments = polyline_segments(&points, h, 0);
     let edge = (points[1] - points[0]).norm();
     let gaps = [neighbour_gap(2.0 * h, edge)];
     let margin = 0.25 * h;

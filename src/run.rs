@@ -47,10 +47,14 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pull_speed: Option<f64>,
-    /// Time step (s) [default 1e-3].
+    /// Time step (s), the largest one when adaptive [default 1e-3].
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     dt: Option<f64>,
+    /// Adapt the time step to the penetration, between dt/64 and dt [default true].
+    #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    adaptive_dt: Option<bool>,
     /// Longest relaxation before pulling (s) [default 2].
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -25,7 +25,14 @@ pub const PARAM_DOCS: &[(&str, &str)] = &[
     ("poisson_ratio", "Poisson's ratio: 0..=0.5. Paper: 0.5."),
     ("density", "Density (kg/m^3): 1..=1e5. Paper's code: 1000."),
     ("pull_speed", "Pulling speed of each clamp (m/s): 1e-5..=1."),
-    ("dt", "Time step (s): 1e-6..=1e-2."),
+    (
+        "dt",
+        "Time step (s): 1e-6..=1e-2; with adaptive_dt the largest step. Paper's code: 1 ms.",
+    ),
+    (
+        "adaptive_dt",
+        "Halve the step (down to dt/64) while contacts penetrate and grow it back when calm; false: constant dt.",
+    ),
     (
         "relax_time",
         "Longest relaxation with the ends held before pulling (s): 0..=100.",

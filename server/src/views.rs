@@ -222,8 +222,8 @@ pub struct CaseDetail {
     pub sweeps: Vec<i64>,
     pub result: Option<ResultView>,
     /// The tightening series (one object per sample: time, l_k_bar,
-    /// l_c_over_l, force, f_bar, width, height, h_bar, kinetic_energy,
-    /// contacts, active_contacts, max_penetration, newton_iterations), null
+    /// l_c_over_l, force, f_bar, width, height, h_bar, kinetic_energy (peak since the previous sample),
+    /// contacts, active_contacts, max_penetration, newton_iterations, dt), null
     /// before the result.
     #[schema(value_type = Option<Vec<Object>>)]
     pub series: Option<Value>,

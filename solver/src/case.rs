@@ -24,8 +24,12 @@ pub struct CaseParams {
     pub density: f64,
     /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
     pub pull_speed: f64,
-    /// Time step (s); the paper's code: 1 ms.
+    /// Time step (s); the paper's code: 1 ms. With `adaptive_dt` the largest step.
     pub dt: f64,
+    /// Adapt the step to the penetration (see `solver::time_step`): halve it
+    /// down to dt/64 while contacts penetrate, grow it back to `dt` when calm.
+    /// `false`: the constant step `dt` of the paper's scheme.
+    pub adaptive_dt: bool,
     /// Relaxation before pulling: the ends are held until the kinetic energy
     /// falls below `relax_tolerance` times the elastic energy, at most this long (s).
     pub relax_time: f64,
@@ -60,6 +64,7 @@ impl Default for CaseParams {
             density: 1000.0,
             pull_speed: 3e-3,
             dt: 1e-3,
+            adaptive_dt: true,
             relax_time: 2.0,
             relax_tolerance: 1e-4,
             damping: 0.0,

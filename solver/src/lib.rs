@@ -18,4 +18,5 @@ pub mod protocol;
 pub mod rod;
 pub mod simplified;
 pub mod stepper;
+pub mod time_step;
 pub mod validation;

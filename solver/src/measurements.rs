@@ -35,7 +35,8 @@ pub struct Sample {
     pub width: f64,
     pub height: f64,
     pub h_bar: f64,
-    /// Kinetic energy (J).
+    /// Largest kinetic energy (J) over the steps since the previous sample, so
+    /// that a snap shorter than the sampling interval is not missed.
     pub kinetic_energy: f64,
     /// Contacts within the detection margin and those carrying load.
     pub contacts: usize,
@@ -44,17 +45,19 @@ pub struct Sample {
     pub max_penetration: f64,
     /// Newton iterations of the step that produced the sample.
     pub newton_iterations: u32,
+    /// Time step (s) of the step that produced the sample.
+    pub dt: f64,
 }
 
 /// Header of the series CSV, one column per `Sample` field.
-pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations";
+pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations,dt";
 
 /// The series as CSV text (header, then one row per sample).
 pub fn series_csv(series: &[Sample]) -> String {
     let mut out = format!("{CSV_HEADER}\n");
     for s in series {
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             s.time,
             s.l_k_bar,
             s.l_c_over_l,
@@ -67,7 +70,8 @@ pub fn series_csv(series: &[Sample]) -> String {
             s.contacts,
             s.active_contacts,
             s.max_penetration,
-            s.newton_iterations
+            s.newton_iterations,
+            s.dt
         ));
     }
     out

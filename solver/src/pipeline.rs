@@ -18,7 +18,7 @@ use crate::contact::segment::closest_points;
 use crate::counters::Counters;
 use crate::energies::{self, Terms};
 use crate::external::{Environment, gravity};
-use crate::rod::{Rod, node_dof};
+use crate::rod::{Rod, RodState, node_dof};
 use crate::stepper::{NewtonOptions, StepError, StepReport, Stepper};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -154,6 +154,15 @@ pub struct World {
     v_free: Vec<Vector3<f64>>,
     forces: Vec<Vec<f64>>,
     grad: Vec<Vec<f64>>,
+    saved: Saved,
+}
+
+/// A checkpoint of the world: every rod's state and the contact warm start.
+#[derive(Clone, Default)]
+struct Saved {
+    rods: Vec<RodState>,
+    warm_ids: Vec<(usize, usize)>,
+    warm_forces: Vec<Vector3<f64>>,
 }
 
 impl World {
@@ -197,7 +206,32 @@ impl World {
             v_free: vec![Vector3::zeros(); total],
             forces,
             grad,
+            saved: Saved::default(),
         }
+    }
+
+    /// Remembers the current state so that [`World::rollback`] can return to it.
+    pub fn checkpoint(&mut self) {
+        self.saved.rods.resize_with(self.rods.len(), RodState::default);
+        for (rod, state) in self.rods.iter().zip(&mut self.saved.rods) {
+            rod.save_state(state);
+        }
+        self.saved.warm_ids.clone_from(&self.warm_ids);
+        self.saved.warm_forces.clone_from(&self.warm_forces);
+    }
+
+    /// Returns to the last [`World::checkpoint`] (to redo a step differently).
+    pub fn rollback(&mut self) {
+        for (rod, state) in self.rods.iter_mut().zip(&self.saved.rods) {
+            rod.load_state(state);
+        }
+        self.warm_ids.clone_from(&self.saved.warm_ids);
+        self.warm_forces.clone_from(&self.saved.warm_forces);
+    }
+
+    /// The largest rod radius (the scale of contact tolerances).
+    pub fn largest_radius(&self) -> f64 {
+        self.rods.iter().map(|r| r.section.radius).fold(0.0, f64::max)
     }
 
     /// The stepper of rod `i` (for its clamp reactions).

@@ -10,6 +10,7 @@ use crate::measurements::{self, Inversion, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World};
 use crate::rod::{End, Rod};
 use crate::stepper::NewtonOptions;
+use crate::time_step::{AdaptiveOptions, TimeStep};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -46,6 +47,10 @@ pub struct Stats {
     pub steps: u64,
     pub newton_iterations: u64,
     pub relax_steps: u64,
+    /// Steps redone with half the step (adaptive time step).
+    pub rejected_steps: u64,
+    /// Smallest time step taken (s).
+    pub smallest_dt: f64,
     /// Wall time (s) of the whole case and per stage.
     pub wall_time: f64,
     pub detection_time: f64,
@@ -82,8 +87,6 @@ pub struct Progress {
 
 /// Penetration (fraction of h) that ends a case as `Penetrated`.
 const MAX_PENETRATION: f64 = 0.5;
-/// Samples between topology checks.
-const TOPOLOGY_EVERY: usize = 50;
 /// Frames kept around the newest sample for the inversion snapshots.
 const FRAME_HISTORY: usize = 40;
 /// Damping rate (1/s) while relaxing.
@@ -170,6 +173,11 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         damping: RELAX_DAMPING,
     };
     let mut world = World::new(vec![rod], env, contact, newton);
+    let mut clock = TimeStep::new(if params.adaptive_dt {
+        AdaptiveOptions::up_to(params.dt)
+    } else {
+        AdaptiveOptions::fixed(params.dt)
+    });
     let frame = |w: &World, label: &str, l_k_bar: f64| Frame {
         label: label.to_string(),
         l_k_bar,
@@ -181,25 +189,37 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     };
 
     // Relaxation with the ends held.
-    let relax_steps = (params.relax_time / params.dt).round() as u64;
     let mut grad = vec![0.0; world.rods[0].ndof()];
-    for _ in 0..relax_steps {
-        if let Err(e) = world.step(params.dt) {
-            return finish(
-                report,
-                world,
-                Status::Diverged,
-                format!("while relaxing: {e}"),
-                started,
-            );
-        }
+    let mut relaxed_for = 0.0;
+    while relaxed_for < params.relax_time {
+        let step = match clock.advance(&mut world) {
+            Ok(s) => s,
+            Err(e) => {
+                let reason = format!("while relaxing: {e}");
+                return finish(report, world, &clock, Status::Diverged, reason, started);
+            }
+        };
+        relaxed_for += step.dt;
         report.stats.relax_steps += 1;
+        if step.report.max_penetration > MAX_PENETRATION * params.h {
+            let reason = format!(
+                "penetration {:.3} h exceeds {MAX_PENETRATION} h while relaxing",
+                step.report.max_penetration / params.h
+            );
+            return finish(report, world, &clock, Status::Penetrated, reason, started);
+        }
         let ke = world.rods[0].kinetic_energy();
         let elastic =
             crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut grad, None).total();
         if ke <= params.relax_tolerance * elastic {
             break;
         }
+    }
+    let det = knot::knot_determinant(&world.rods[0].positions()).ok();
+    if det != Some(expected) {
+        report.determinant_final = det;
+        let reason = format!("knot determinant {det:?} after relaxing, expected {expected}");
+        return finish(report, world, &clock, Status::TopologyChanged, reason, started);
     }
     report.frames.push(frame(&world, "relaxed", l_k_bar_of(&world)));
 
@@ -218,12 +238,14 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     // The loop's middle node, from the builder and then tracked from each sample's braid ends.
     let mut mid = (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2;
     let mut time = 0.0;
+    let mut peak_kinetic_energy: f64 = 0.0;
     loop {
-        let step = match world.step(params.dt) {
-            Ok(s) => s,
-            Err(e) => return finish(report, world, Status::Diverged, e.to_string(), started),
+        let (step, dt) = match clock.advance(&mut world) {
+            Ok(s) => (s.report, s.dt),
+            Err(e) => return finish(report, world, &clock, Status::Diverged, e.to_string(), started),
         };
-        time += params.dt;
+        time += dt;
+        peak_kinetic_energy = peak_kinetic_energy.max(world.rods[0].kinetic_energy());
         report.stats.steps += 1;
         report.stats.newton_iterations += u64::from(step.newton_iterations);
         if step.max_penetration > MAX_PENETRATION * params.h {
@@ -232,7 +254,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
                 step.max_penetration / params.h,
                 l_k_bar_of(&world)
             );
-            return finish(report, world, Status::Penetrated, reason, started);
+            return finish(report, world, &clock, Status::Penetrated, reason, started);
         }
         let l_k_bar = l_k_bar_of(&world);
         if l_k_bar > next_sample {
@@ -261,11 +283,12 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
             width,
             height,
             h_bar: if width > 0.0 { height / width } else { 0.0 },
-            kinetic_energy: rod.kinetic_energy(),
+            kinetic_energy: std::mem::take(&mut peak_kinetic_energy),
             contacts: step.contacts,
             active_contacts: step.active_contacts,
             max_penetration: step.max_penetration / params.h,
             newton_iterations: step.newton_iterations,
+            dt,
         });
         if history.len() == FRAME_HISTORY {
             history.pop_front();
@@ -287,13 +310,11 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
                 report.frames.extend(at("at_inversion", inv.l_k_bar));
             }
         }
-        if report.series.len() % TOPOLOGY_EVERY == 0 {
-            let det = knot::knot_determinant(&points).ok();
-            if det != Some(expected) {
-                report.determinant_final = det;
-                let reason = format!("knot determinant {det:?} at l_k bar {l_k_bar:.2}, expected {expected}");
-                return finish(report, world, Status::TopologyChanged, reason, started);
-            }
+        let det = knot::knot_determinant(&points).ok();
+        if det != Some(expected) {
+            report.determinant_final = det;
+            let reason = format!("knot determinant {det:?} at l_k bar {l_k_bar:.2}, expected {expected}");
+            return finish(report, world, &clock, Status::TopologyChanged, reason, started);
         }
         let stop_l = match (report.inversion, params.stop_after_inversion) {
             (Some(inv), Some(margin)) => (inv.l_k_bar - margin).max(params.min_l_k_bar),
@@ -308,7 +329,14 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
             steps: report.stats.steps,
         });
         if !keep_going {
-            return finish(report, world, Status::Cancelled, "cancelled".to_string(), started);
+            return finish(
+                report,
+                world,
+                &clock,
+                Status::Cancelled,
+                "cancelled".to_string(),
+                started,
+            );
         }
         let tight = params.max_force_bar.is_some_and(|m| sample.f_bar > m);
         if l_k_bar <= stop_l || tight {
@@ -319,16 +347,17 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     report.determinant_final = det;
     if det != Some(expected) {
         let reason = format!("knot determinant {det:?} at the end, expected {expected}");
-        return finish(report, world, Status::TopologyChanged, reason, started);
+        return finish(report, world, &clock, Status::TopologyChanged, reason, started);
     }
     let l_end = l_k_bar_of(&world);
     report.frames.push(frame(&world, "final", l_end));
-    finish(report, world, Status::Completed, String::new(), started)
+    finish(report, world, &clock, Status::Completed, String::new(), started)
 }
 
 fn finish(
     mut report: CaseReport,
     world: World,
+    clock: &TimeStep,
     status: Status,
     reason: String,
     started: std::time::Instant,
@@ -337,7 +366,17 @@ fn finish(
     report.reason = reason;
     if status != Status::Completed {
         report.inversion = None;
+        let rod = &world.rods[0];
+        let l_k_bar =
+            (report.params.length - (rod.node(rod.nodes() - 1) - rod.node(0)).norm()) / report.params.h;
+        report.frames.push(Frame {
+            label: "failure".to_string(),
+            l_k_bar,
+            points: rod.positions().iter().map(|p| [p.x, p.y, p.z]).collect(),
+        });
     }
+    report.stats.rejected_steps = clock.rejected;
+    report.stats.smallest_dt = clock.smallest;
     report.stats.wall_time = started.elapsed().as_secs_f64();
     report.stats.detection_time = world.counters.detection.as_secs_f64();
     report.stats.contact_time = world.counters.contact_solve.as_secs_f64();

@@ -62,6 +62,17 @@ pub struct Geometry {
     pub ref_twist: Vec<f64>,
 }
 
+/// The state of a rod at an accepted step (DOFs, velocities and the frames the
+/// next step transports from): enough to redo a step from there.
+#[derive(Clone, Debug, Default)]
+pub struct RodState {
+    q: Vec<f64>,
+    velocity: Vec<f64>,
+    tangent: Vec<Vector3<f64>>,
+    d1: Vec<Vector3<f64>>,
+    ref_twist: Vec<f64>,
+}
+
 /// One naturally straight elastic rod with circular cross-section.
 #[derive(Clone, Debug)]
 pub struct Rod {
@@ -348,6 +359,26 @@ impl Rod {
             *t = r * *t;
             *d = r * *d;
         }
+        self.update_geometry();
+    }
+
+    /// Copies the last accepted step into `state` (reusing its buffers).
+    pub fn save_state(&self, state: &mut RodState) {
+        state.q.clone_from(&self.q_old);
+        state.velocity.clone_from(&self.velocity);
+        state.tangent.clone_from(&self.tangent_old);
+        state.d1.clone_from(&self.d1_old);
+        state.ref_twist.clone_from(&self.ref_twist_old);
+    }
+
+    /// Returns to a state saved by [`Rod::save_state`] on this rod.
+    pub fn load_state(&mut self, state: &RodState) {
+        self.q_old.copy_from_slice(&state.q);
+        self.q.copy_from_slice(&state.q);
+        self.velocity.copy_from_slice(&state.velocity);
+        self.tangent_old.copy_from_slice(&state.tangent);
+        self.d1_old.copy_from_slice(&state.d1);
+        self.ref_twist_old.copy_from_slice(&state.ref_twist);
         self.update_geometry();
     }
 

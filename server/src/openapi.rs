@@ -27,7 +27,7 @@ pub const PARAM_DOCS: &[(&str, &str)] = &[
     ("pull_speed", "Pulling speed of each clamp (m/s): 1e-5..=1."),
     (
         "dt",
-        "Time step (s): 1e-6..=1e-2; with adaptive_dt the largest step. Paper's code: 1 ms.",
+        "Time step (s): 1e-6..=1e-2; with adaptive_dt the largest step; null: 1 ms (the paper's code) at L = 1 m, K = 301, scaled with the square of the edge length L/(K-1).",
     ),
     (
         "adaptive_dt",

@@ -190,7 +190,7 @@ impl Default for InversionCriteria {
     fn default() -> Self {
         Self {
             drop_fraction: 0.4,
-            window: 4.0,
+            window: 10.0,
             kinetic_energy_spike: 5.0,
         }
     }
@@ -199,29 +199,42 @@ impl Default for InversionCriteria {
 /// The first sudden drop of H bar that the kinetic energy confirms, and the
 /// force drop around it (paper Fig. 5). Samples are ordered by decreasing l_k bar;
 /// sample j drops when its H bar is at most `drop_fraction` times the largest H
-/// bar of the samples within `window` before it.
+/// bar of the samples within `window` before it. The snap is confirmed when the
+/// peak kinetic energy from that largest-H sample to a few samples after j
+/// exceeds the median over the samples before the drop began by
+/// `kinetic_energy_spike`.
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
     for j in 1..series.len() {
         let drop = &series[j];
         if drop.width <= 0.0 {
             continue;
         }
-        let reference = series[..j]
+        let Some((start, reference)) = series[..j]
             .iter()
+            .enumerate()
             .rev()
-            .take_while(|s| s.l_k_bar - drop.l_k_bar <= criteria.window)
-            .map(|s| s.h_bar)
-            .fold(0.0, f64::max);
+            .take_while(|(_, s)| s.l_k_bar - drop.l_k_bar <= criteria.window)
+            .map(|(i, s)| (i, s.h_bar))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            continue;
+        };
         if reference <= 0.0 || drop.h_bar > criteria.drop_fraction * reference {
             continue;
         }
         let before = &series[j - 1];
-        let lo = j.saturating_sub(20);
-        let mut ke: Vec<f64> = series[lo..j].iter().map(|s| s.kinetic_energy).collect();
+        let lo = start.saturating_sub(20);
+        let mut ke: Vec<f64> = series[lo..start.max(lo + 1)]
+            .iter()
+            .map(|s| s.kinetic_energy)
+            .collect();
         ke.sort_by(f64::total_cmp);
         let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
         let hi = (j + 4).min(series.len());
-        let peak = series[j..hi].iter().map(|s| s.kinetic_energy).fold(0.0, f64::max);
+        let peak = series[start..hi]
+            .iter()
+            .map(|s| s.kinetic_energy)
+            .fold(0.0, f64::max);
         let ratio = peak / median;
         if ratio < criteria.kinetic_energy_spike {
             continue;
@@ -320,6 +333,22 @@ mod tests {
         assert_eq!(inv.sample, 39);
         assert_eq!(inv.h_bar_after, 0.05);
         assert!(inv.f_bar_after < inv.f_bar_before);
+    }
+
+    /// A snap spread over several samples, with the kinetic energy already up
+    /// when H bar crosses the threshold: the baseline is taken before the drop.
+    #[test]
+    fn drop_over_several_samples_is_an_inversion() {
+        let mut s: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0))
+            .collect();
+        for (k, h) in [0.7, 0.55, 0.4, 0.25, 0.1, 0.08].into_iter().enumerate() {
+            s.push(sample(160.0 - k as f64, h, 1e-6, 0.5));
+        }
+        let inv = detect_inversion(&s, &InversionCriteria::default()).expect("detected");
+        assert_eq!(inv.h_bar_after, 0.25);
+        assert_eq!(inv.l_k_bar, 158.0);
+        assert!(inv.kinetic_energy_ratio > 100.0);
     }
 
     #[test]

@@ -173,10 +173,11 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         damping: RELAX_DAMPING,
     };
     let mut world = World::new(vec![rod], env, contact, newton);
+    let dt = params.time_step();
     let mut clock = TimeStep::new(if params.adaptive_dt {
-        AdaptiveOptions::up_to(params.dt)
+        AdaptiveOptions::up_to(dt)
     } else {
-        AdaptiveOptions::fixed(params.dt)
+        AdaptiveOptions::fixed(dt)
     });
     let frame = |w: &World, label: &str, l_k_bar: f64| Frame {
         label: label.to_string(),

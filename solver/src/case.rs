@@ -257,6 +257,28 @@ mod tests {
     }
 
     #[test]
+    fn automatic_time_step_scales_with_the_squared_edge() {
+        let paper = CaseParams::default();
+        assert!((paper.time_step() - REFERENCE_DT).abs() < 1e-15);
+        let finer = CaseParams {
+            nodes: 401,
+            ..CaseParams::default()
+        };
+        assert!((finer.time_step() - REFERENCE_DT * 0.75 * 0.75).abs() < 1e-15);
+        let given = CaseParams {
+            nodes: 401,
+            dt: Some(2e-3),
+            ..CaseParams::default()
+        };
+        assert_eq!(given.time_step(), 2e-3);
+        let coarse = CaseParams {
+            nodes: 51,
+            ..CaseParams::default()
+        };
+        assert_eq!(coarse.time_step(), 1e-2);
+    }
+
+    #[test]
     fn unknown_fields_are_rejected() {
         let r: Result<CaseParams, _> = serde_json::from_str(r#"{"n": 3, "radius": 0.001}"#);
         assert!(r.is_err());

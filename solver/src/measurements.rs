@@ -189,7 +189,7 @@ pub struct InversionCriteria {
 impl Default for InversionCriteria {
     fn default() -> Self {
         Self {
-            drop_fraction: 0.4,
+            drop_fraction: 0.6,
             window: 10.0,
             kinetic_energy_spike: 5.0,
         }
@@ -346,8 +346,8 @@ mod tests {
             s.push(sample(160.0 - k as f64, h, 1e-6, 0.5));
         }
         let inv = detect_inversion(&s, &InversionCriteria::default()).expect("detected");
-        assert_eq!(inv.h_bar_after, 0.25);
-        assert_eq!(inv.l_k_bar, 158.0);
+        assert_eq!(inv.h_bar_after, 0.4);
+        assert_eq!(inv.l_k_bar, 159.0);
         assert!(inv.kinetic_energy_ratio > 100.0);
     }
 

@@ -276,9 +276,9 @@ fn report(get: &Lookup) -> Result<String> {
     for (key, what) in [
         ("dt_half", "largest dt halved"),
         ("dt_fixed", "constant dt (the paper's scheme)"),
-        ("K401", "K = 401 (automatic dt 0.5625 ms)"),
-        ("speed_half", "pull speed halved (1.5 mm/s)"),
-        ("speed_1mm", "pull speed 1 mm/s (the paper's text)"),
+        ("K401", "K = 401"),
+        ("speed_half", "pull speed halved"),
+        ("speed_1mm", "the paper's text's pull speed"),
     ] {
         let (j, r) = get(key).context("convergence case missing")?;
         let l = inversion(r);
@@ -287,7 +287,12 @@ fn report(get: &Lookup) -> Result<String> {
             _ => None,
         };
         rows.push((
-            format!("convergence: {what}, inversion within 3 % of the default"),
+            format!(
+                "convergence: {what} (step {} ms{}, {} mm/s), inversion within 3 % of the default",
+                j.params.time_step() * 1e3,
+                if j.params.adaptive_dt { " or less" } else { "" },
+                j.params.pull_speed * 1e3
+            ),
             command(&j.params),
             format!(
                 "{} ; change {}",

@@ -179,15 +179,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     } else {
         AdaptiveOptions::fixed(dt)
     });
-    let frame = |w: &World, label: &str, l_k_bar: f64| Frame {
-        label: label.to_string(),
-        l_k_bar,
-        points: w.rods[0].positions().iter().map(|p| [p.x, p.y, p.z]).collect(),
-    };
-    let l_k_bar_of = |w: &World| {
-        let r = &w.rods[0];
-        (params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / params.h
-    };
+    let l_k_bar_of = |w: &World| l_k_bar(w, params);
 
     // Relaxation with the ends held.
     let mut grad = vec![0.0; world.rods[0].ndof()];
@@ -355,6 +347,25 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     finish(report, world, &clock, Status::Completed, String::new(), started)
 }
 
+/// l_k bar = (L - l_c) / h (eq. 11) of the world's rod.
+fn l_k_bar(world: &World, params: &CaseParams) -> f64 {
+    let r = &world.rods[0];
+    (params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / params.h
+}
+
+/// A snapshot of the world's rod.
+fn frame(world: &World, label: &str, l_k_bar: f64) -> Frame {
+    Frame {
+        label: label.to_string(),
+        l_k_bar,
+        points: world.rods[0]
+            .positions()
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect(),
+    }
+}
+
 fn finish(
     mut report: CaseReport,
     world: World,
@@ -367,14 +378,8 @@ fn finish(
     report.reason = reason;
     if status != Status::Completed {
         report.inversion = None;
-        let rod = &world.rods[0];
-        let l_k_bar =
-            (report.params.length - (rod.node(rod.nodes() - 1) - rod.node(0)).norm()) / report.params.h;
-        report.frames.push(Frame {
-            label: "failure".to_string(),
-            l_k_bar,
-            points: rod.positions().iter().map(|p| [p.x, p.y, p.z]).collect(),
-        });
+        let at = l_k_bar(&world, &report.params);
+        report.frames.push(frame(&world, "failure", at));
     }
     report.stats.rejected_steps = clock.rejected;
     report.stats.smallest_dt = clock.smallest;

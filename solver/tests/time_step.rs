@@ -12,7 +12,7 @@ use solver::time_step::{AdaptiveOptions, TimeStep};
 const H: f64 = 1e-3;
 
 /// Two perpendicular clamped rods (L = 10 cm, h = 1 mm, K = 41); the upper one
-/// is pressed down onto the lower one at `speed` for `press` seconds.
+/// moves down onto the lower one at `speed` (m/s).
 fn crossing(speed: f64) -> World {
     let line = |a: Vector3<f64>, b: Vector3<f64>| -> Vec<Vector3<f64>> {
         (0..41).map(|i| a + (b - a) * (i as f64 / 40.0)).collect()

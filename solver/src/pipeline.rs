@@ -323,8 +323,13 @@ impl World {
 
     fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) {
         for (b, rod) in self.rods.iter().enumerate() {
-            let grad = &mut self.grad[b];
-            energies::evaluate(rod, Terms::ALL, grad, None);
+            let grad: &[f64] = match self.steppers[b].elastic_gradient(rod) {
+                Some(g) => g,
+                None => {
+                    energies::evaluate(rod, Terms::ALL, &mut self.grad[b], None);
+                    &self.grad[b]
+                }
+            };
             let force = &mut self.forces[b];
             force.copy_from_slice(&self.loads[b]);
             gravity::add(rod, &self.env.gravity, force);

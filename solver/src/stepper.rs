@@ -95,6 +95,8 @@ pub enum NewtonFailure {
 pub struct Stepper {
     pub options: NewtonOptions,
     grad: Vec<f64>,
+    /// The DOFs at which `grad` is the final Newton iterate's (NaN: none).
+    grad_q: Vec<f64>,
     resid: Vec<f64>,
     ext: Vec<f64>,
     delta: Vec<f64>,
@@ -117,6 +119,7 @@ impl Stepper {
         Self {
             options,
             grad: vec![0.0; n],
+            grad_q: vec![f64::NAN; n],
             resid: vec![0.0; n],
             ext: vec![0.0; n],
             delta: vec![0.0; n],
@@ -177,7 +180,15 @@ impl Stepper {
                 }
             }
         }
+        self.grad_q.copy_from_slice(&rod.q);
         Ok(report)
+    }
+
+    /// The elastic gradient (eq. 6) at `rod`'s current DOFs when the last
+    /// step ended there: its final Newton iterate evaluated it, so the next
+    /// step's explicit forces need not evaluate it again.
+    pub fn elastic_gradient(&self, rod: &Rod) -> Option<&[f64]> {
+        (self.grad_q == rod.q).then_some(&self.grad)
     }
 
     /// Force the clamp at `end` exerts on the rod after the last step (N), and

@@ -289,7 +289,9 @@ fn report(get: &Lookup) -> Result<String> {
         rows.push((
             format!(
                 "convergence: {what} (step {} ms{}, {} mm/s), inversion within 3 % of the default",
-                j.params.time_step() * 1e3,
+                format!("{:.4}", j.params.time_step() * 1e3)
+                    .trim_end_matches('0')
+                    .trim_end_matches('.'),
                 if j.params.adaptive_dt { " or less" } else { "" },
                 j.params.pull_speed * 1e3
             ),

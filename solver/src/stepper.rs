@@ -6,6 +6,8 @@
 //! Phi(q) = 1/(2 dt^2) |q - q_old - dt v_old|_M^2 + E(q) - F_ext.q whose gradient
 //! is the residual r. A step whose Newton iteration fails is retried as two half
 //! steps, up to `max_halvings` times; then the step ends with a `StepError`.
+//! By default a step reuses the previous step's factored matrix while that
+//! converges quickly (`NewtonOptions::reuse_factorization`).
 //! Viscous damping F = -gamma M v (v = (q - q_old)/dt) folds into the inertia
 //! coefficient: (1 + gamma dt)/dt^2 M (q - q_old) - M v_old/dt.
 use crate::energies::{self, BANDWIDTH, Energies, Terms};
@@ -34,6 +36,12 @@ pub struct NewtonOptions {
     pub max_backtracks: u32,
     /// Time-step halvings before a step is declared failed.
     pub max_halvings: u32,
+    /// Modified Newton across steps: a step of the same size (same inertia
+    /// coefficient) starts from the previous step's factored Newton matrix
+    /// instead of assembling and factoring a new one, and assembles a new one
+    /// as soon as a reused one fails to cut the residual tenfold in a full
+    /// Newton step. Each step still converges to `rtol`.
+    pub reuse_factorization: bool,
 }
 
 impl Default for NewtonOptions {
@@ -44,6 +52,7 @@ impl Default for NewtonOptions {
             max_iterations: 30,
             max_backtracks: 12,
             max_halvings: 8,
+            reuse_factorization: true,
         }
     }
 }
@@ -103,6 +112,10 @@ pub struct Stepper {
     q_base: Vec<f64>,
     hess: BandedSym,
     ldlt: BandedLdlt,
+    /// The inertia coefficient `c_in` of the matrix factored in `ldlt`, while
+    /// that factorisation may be reused by the next step.
+    factored_c_in: Option<f64>,
+    factorizations: u64,
 }
 
 struct Attempt {
@@ -126,6 +139,8 @@ impl Stepper {
             q_base: vec![0.0; n],
             hess: BandedSym::new(n, BANDWIDTH),
             ldlt: BandedLdlt::with_capacity(n, BANDWIDTH),
+            factored_c_in: None,
+            factorizations: 0,
         }
     }
 
@@ -191,6 +206,11 @@ impl Stepper {
         (self.grad_q == rod.q).then_some(&self.grad)
     }
 
+    /// Newton matrices assembled and factored since the stepper was made.
+    pub fn factorizations(&self) -> u64 {
+        self.factorizations
+    }
+
     /// Force the clamp at `end` exerts on the rod after the last step (N), and
     /// its torque about the end edge (N m).
     pub fn clamp_reaction(&self, rod: &Rod, end: End) -> (Vector3<f64>, f64) {
@@ -230,11 +250,17 @@ impl Stepper {
             rod.q[j] = rod.q_old[j] + h * v;
         }
         rod.update_geometry();
-        let mut energies = energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
+        let reuse = self.options.reuse_factorization && self.factored_c_in == Some(c_in);
+        let mut energies = if reuse {
+            energies::evaluate(rod, Terms::ALL, &mut self.grad, None)
+        } else {
+            energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess))
+        };
         let mut phi = self.residual_and_potential(rod, h, c_in, energies.total());
         let mut scaled = scaled_norm(rod, &self.resid, f_tol, m_tol);
         let mut negative_pivots = 0;
-        let mut hessian_current = true;
+        let mut hessian_current = !reuse;
+        let mut stale = reuse;
         for iteration in 0..self.options.max_iterations {
             if scaled <= 1.0 {
                 return Ok(Attempt {
@@ -244,20 +270,25 @@ impl Stepper {
                     energies,
                 });
             }
-            if !hessian_current {
-                energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
-            }
-            for j in 0..rod.ndof() {
-                self.hess.add_diagonal(j, c_in * rod.mass[j]);
-                if rod.fixed[j] {
-                    self.hess.constrain(j);
+            if !stale {
+                if !hessian_current {
+                    energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
                 }
+                for j in 0..rod.ndof() {
+                    self.hess.add_diagonal(j, c_in * rod.mass[j]);
+                    if rod.fixed[j] {
+                        self.hess.constrain(j);
+                    }
+                }
+                self.factored_c_in = None;
+                let inertia = self
+                    .ldlt
+                    .factor(&self.hess)
+                    .map_err(|_| (NewtonFailure::Singular, iteration))?;
+                self.factored_c_in = Some(c_in);
+                self.factorizations += 1;
+                negative_pivots = inertia.negative;
             }
-            let inertia = self
-                .ldlt
-                .factor(&self.hess)
-                .map_err(|_| (NewtonFailure::Singular, iteration))?;
-            negative_pivots = inertia.negative;
             let mut slope = 0.0;
             for j in 0..rod.ndof() {
                 self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
@@ -267,6 +298,10 @@ impl Stepper {
                 if !rod.fixed[j] {
                     slope += self.resid[j] * self.delta[j];
                 }
+            }
+            if stale && (slope >= 0.0 || slope.is_nan()) {
+                stale = false;
+                continue;
             }
             if slope >= 0.0 || slope.is_nan() {
                 return Err((NewtonFailure::NotDescent, iteration));
@@ -285,6 +320,9 @@ impl Stepper {
                 let scaled_trial = scaled_norm(rod, &self.resid, f_tol, m_tol);
                 let finite = phi_trial.is_finite() && scaled_trial.is_finite();
                 if finite && (phi_trial <= phi + 1e-4 * alpha * slope || scaled_trial < scaled) {
+                    if stale && (backtracks > 0 || scaled_trial > 0.1 * scaled) {
+                        stale = false;
+                    }
                     energies = trial;
                     phi = phi_trial;
                     scaled = scaled_trial;

@@ -219,6 +219,9 @@ impl LoopSolver {
             rtol: 1e-9,
             max_iterations: 40,
             max_halvings: 2,
+            // Each continuation point is a new static problem: fresh Newton
+            // converges quadratically where a reused matrix would not.
+            reuse_factorization: false,
             ..NewtonOptions::default()
         };
         let stepper = Stepper::new(&rod, options);

@@ -72,6 +72,7 @@ fn jobs() -> Vec<Job> {
     v.push(job("K401", |p| p.nodes = 401));
     v.push(job("speed_half", |p| p.pull_speed /= 2.0));
     v.push(job("speed_1mm", |p| p.pull_speed = 1e-3));
+    v.push(job("contact_tight", |p| p.contact_tolerance /= 100.0));
     v
 }
 
@@ -99,6 +100,9 @@ fn command(p: &CaseParams) -> String {
     }
     if p.pull_speed != d.pull_speed {
         write!(s, " --pull-speed {:e}", p.pull_speed).ok();
+    }
+    if p.contact_tolerance != d.contact_tolerance {
+        write!(s, " --contact-tolerance {:e}", p.contact_tolerance).ok();
     }
     s
 }
@@ -279,6 +283,7 @@ fn report(get: &Lookup) -> Result<String> {
         ("K401", "K = 401"),
         ("speed_half", "pull speed halved"),
         ("speed_1mm", "the paper's text's pull speed"),
+        ("contact_tight", "contact solve 100 times tighter"),
     ] {
         let (j, r) = get(key).context("convergence case missing")?;
         let l = inversion(r);
@@ -309,7 +314,7 @@ fn report(get: &Lookup) -> Result<String> {
     let d = CaseParams::default();
     writeln!(
         doc,
-        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm.\n",
+        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}.\n",
         d.length,
         d.nodes,
         d.youngs_modulus,
@@ -324,6 +329,7 @@ fn report(get: &Lookup) -> Result<String> {
         d.pull_speed * 1e3,
         d.mu,
         d.h * 1e3,
+        d.contact_tolerance,
     )?;
     writeln!(doc, "| check | command | figure | pass |\n|---|---|---|---|")?;
     let passed = rows.iter().filter(|r| r.3).count();

@@ -55,6 +55,10 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     adaptive_dt: Option<bool>,
+    /// Relative tolerance of each step's contact solve [default 1e-6].
+    #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    contact_tolerance: Option<f64>,
     /// Longest relaxation before pulling (s) [default 2].
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -185,10 +189,11 @@ fn summarise(report: &CaseReport) {
     }
     let s = &report.stats;
     println!(
-        "{} steps ({} relaxing), {} Newton iterations, {:.1} s wall (detection {:.1} s, contact {:.1} s, rods {:.1} s)",
+        "{} steps ({} relaxing), {} Newton iterations, {} contact sweeps, {:.1} s wall (detection {:.1} s, contact {:.1} s, rods {:.1} s)",
         s.steps,
         s.relax_steps,
         s.newton_iterations,
+        s.contact_sweeps,
         s.wall_time,
         s.detection_time,
         s.contact_time,

@@ -34,6 +34,10 @@ pub const PARAM_DOCS: &[(&str, &str)] = &[
         "Halve the step (down to dt/64) while contacts penetrate and grow it back when calm; false: constant dt.",
     ),
     (
+        "contact_tolerance",
+        "Relative tolerance of each step's frictional contact solve (projected Gauss-Seidel, at most 200 sweeps): 1e-12..=1e-3.",
+    ),
+    (
         "relax_time",
         "Longest relaxation with the ends held before pulling (s): 0..=100.",
     ),

@@ -61,7 +61,7 @@ fn bench_contact(c: &mut Criterion) {
     let options = GaussSeidelOptions {
         max_sweeps: 1000,
         tolerance: 1e-8,
-        close_gap: true,
+        ..Default::default()
     };
     let mut gs = GaussSeidel::new();
     let report = gs

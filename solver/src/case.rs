@@ -31,6 +31,11 @@ pub struct CaseParams {
     /// down to dt/64 while contacts penetrate, grow it back to `dt` when calm.
     /// `false`: the constant step `dt` of the paper's scheme.
     pub adaptive_dt: bool,
+    /// Relative tolerance of the frictional contact solve of each step
+    /// (projected Gauss-Seidel, `solver::contact::gauss_seidel`): the forces
+    /// are accepted when a sweep changes none by more than this times the
+    /// largest, or the natural-map residual is this small (at most 200 sweeps).
+    pub contact_tolerance: f64,
     /// Relaxation before pulling: the ends are held until the kinetic energy
     /// falls below `relax_tolerance` times the elastic energy, at most this long (s).
     pub relax_time: f64,
@@ -66,6 +71,7 @@ impl Default for CaseParams {
             pull_speed: 3e-3,
             dt: None,
             adaptive_dt: true,
+            contact_tolerance: 1e-6,
             relax_time: 2.0,
             relax_tolerance: 1e-4,
             damping: 0.0,
@@ -175,6 +181,11 @@ impl CaseParams {
             finite_in(self.damping, 0.0, 1e4),
             "damping",
             format!("must be in [0, 1e4] 1/s, got {}", self.damping),
+        );
+        check(
+            finite_in(self.contact_tolerance, 1e-12, 1e-3),
+            "contact_tolerance",
+            format!("must be in [1e-12, 1e-3], got {}", self.contact_tolerance),
         );
         check(
             finite_in(self.sample_interval, 1e-3, 100.0),

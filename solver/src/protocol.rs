@@ -3,6 +3,7 @@
 //! then pull the clamps apart along the line joining them at a steady speed,
 //! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
 use crate::case::CaseParams;
+use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::external::Environment;
 use crate::knot::{self, KnotSpec};
 use crate::material::Material;
@@ -46,6 +47,8 @@ pub struct Frame {
 pub struct Stats {
     pub steps: u64,
     pub newton_iterations: u64,
+    /// Contact-solve sweeps summed over the pulling steps.
+    pub contact_sweeps: u64,
     pub relax_steps: u64,
     /// Steps redone with half the step (adaptive time step).
     pub rejected_steps: u64,
@@ -164,9 +167,14 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         force_scale: Some(force_unit),
         ..NewtonOptions::default()
     };
+    let defaults = ContactOptions::default();
     let contact = ContactOptions {
         friction: params.mu,
-        ..ContactOptions::default()
+        solver: GaussSeidelOptions {
+            tolerance: params.contact_tolerance,
+            ..defaults.solver
+        },
+        ..defaults
     };
     let env = Environment {
         gravity: Vector3::zeros(),
@@ -241,6 +249,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         peak_kinetic_energy = peak_kinetic_energy.max(world.rods[0].kinetic_energy());
         report.stats.steps += 1;
         report.stats.newton_iterations += u64::from(step.newton_iterations);
+        report.stats.contact_sweeps += step.contact_sweeps as u64;
         if step.max_penetration > MAX_PENETRATION * params.h {
             let reason = format!(
                 "penetration {:.3} h exceeds {MAX_PENETRATION} h at l_k bar {:.2}",

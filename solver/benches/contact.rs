@@ -58,28 +58,78 @@ fn bench_contact(c: &mut Criterion) {
 
     let inv_mass = vec![1.0; NODES];
     let v_free: Vec<_> = x.iter().map(|p| Vector3::new(-p.x, -p.y, 0.0)).collect();
-    let options = GaussSeidelOptions {
-        max_sweeps: 1000,
-        tolerance: 1e-8,
-        ..Default::default()
-    };
     let mut gs = GaussSeidel::new();
-    let report = gs
-        .solve(&contacts, &inv_mass, &v_free, 1e-3, &options, None)
-        .expect("valid contacts");
-    println!("{} contacts, cold solve: {report:?}", contacts.len());
-    c.bench_function(&format!("gauss_seidel/{}_contacts", contacts.len()), |b| {
-        b.iter(|| {
-            black_box(gs.solve(
-                black_box(&contacts),
-                &inv_mass,
-                black_box(&v_free),
-                1e-3,
-                &options,
-                None,
-            ))
+    bench_solve(c, &mut gs, "knot", &contacts, &inv_mass, &v_free);
+    let (contacts, inv_mass, v_free) = line_contact(60);
+    bench_solve(c, &mut gs, "line", &contacts, &inv_mass, &v_free);
+}
+
+/// Two strands of `m` segments lying side by side and pressed together, one
+/// contact per segment pair: the nearly singular case (forces alternating
+/// along the strands move almost no node).
+fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
+    let contacts = (0..m)
+        .map(|c| {
+            let s = 0.5 + 0.1 * (0.3 * c as f64).sin();
+            ContactPoint {
+                nodes: [c, c + 1, m + 1 + c, m + 2 + c],
+                weights: [1.0 - s, s, s - 1.0, -s],
+                normal: Vector3::z(),
+                gap: -1e-4,
+                mu: 0.1,
+            }
         })
-    });
+        .collect();
+    let v_free = (0..2 * (m + 1))
+        .map(|k| {
+            let side = if k <= m { -1.0 } else { 1.0 };
+            Vector3::new(0.01 * (k as f64).cos(), 0.0, side * 0.05)
+        })
+        .collect();
+    (contacts, vec![1.0; 2 * (m + 1)], v_free)
+}
+
+/// Cold solves to 1e-8 with plain Gauss-Seidel and with the default
+/// over-relaxation; prints the sweeps each needs.
+fn bench_solve(
+    c: &mut Criterion,
+    gs: &mut GaussSeidel,
+    name: &str,
+    contacts: &[ContactPoint],
+    inv_mass: &[f64],
+    v_free: &[Vector3<f64>],
+) {
+    for relaxation in [1.0, GaussSeidelOptions::default().relaxation] {
+        let options = GaussSeidelOptions {
+            max_sweeps: 10_000,
+            tolerance: 1e-8,
+            relaxation,
+            ..Default::default()
+        };
+        let report = gs
+            .solve(contacts, inv_mass, v_free, 1e-3, &options, None)
+            .expect("valid contacts");
+        println!(
+            "{name}, {} contacts, omega {relaxation}: {report:?}",
+            contacts.len()
+        );
+        let id = format!(
+            "gauss_seidel/{name}_{}_contacts_omega_{relaxation}",
+            contacts.len()
+        );
+        c.bench_function(&id, |b| {
+            b.iter(|| {
+                black_box(gs.solve(
+                    black_box(contacts),
+                    inv_mass,
+                    black_box(v_free),
+                    1e-3,
+                    &options,
+                    None,
+                ))
+            })
+        });
+    }
 }
 
 criterion_group!(benches, bench_contact);

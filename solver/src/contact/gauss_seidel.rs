@@ -9,7 +9,8 @@
 //! A. A force `F_c` (on A; B receives `-F_c`), constant over the step, changes
 //! node `k`'s velocity by `dt inv_mass_k w_ck F_c`. With a lumped isotropic
 //! mass every diagonal block of `W` is `w_c I`, so each local problem is
-//! solved exactly by [`super::cone::solve_isotropic`].
+//! solved exactly by [`super::cone::solve_isotropic`]; the step towards that
+//! local solution is over-relaxed (`GaussSeidelOptions::relaxation`).
 
 use super::cone::{ContactFrame, natural_map_residual};
 use super::segment::SegmentPair;
@@ -64,14 +65,14 @@ pub const MIN_NORMAL_DISTANCE: f64 = 1e-9;
 pub struct GaussSeidelOptions {
     /// Sweep cap.
     pub max_sweeps: usize,
-    /// Over-relaxation factor `omega` in (0, 2) (projected SOR): each local
-    /// solve's force change is scaled by `omega` and the force projected back
-    /// onto the friction cone. `1` is plain Gauss-Seidel, whose local solves
-    /// are exact. A line contact between two strands lying side by side has
-    /// nearly singular modes (forces alternating along the strands, which
-    /// move almost no node) that plain Gauss-Seidel damps only after hundreds
-    /// of sweeps; `omega > 1` reaches the same solution in fewer sweeps
-    /// (BENCHMARKS.md). A fixed point is a solution for every `omega`.
+    /// Over-relaxation factor `omega` in (0, 2) (projected SOR): contact `c`
+    /// is updated by `r_c <- P(r_c - (omega / w_c) u_c)`, `P` the projection
+    /// of Signorini and Coulomb's laws. `1` is plain Gauss-Seidel, whose local
+    /// solves are exact. A line contact between two strands lying side by
+    /// side has nearly singular modes (forces alternating along the strands,
+    /// which move almost no node) that plain Gauss-Seidel damps only after
+    /// hundreds of sweeps; `omega > 1` reaches the same solution in fewer
+    /// sweeps (BENCHMARKS.md). A fixed point is a solution for every `omega`.
     pub relaxation: f64,
     /// Stop when the largest force change over a sweep, or the natural-map
     /// residual of [`SolveReport::residual`] (checked every 8 sweeps), is at
@@ -192,45 +193,25 @@ impl Row {
         }
     }
 
-    /// Exact local solve of [`super::cone::solve_isotropic`] for the current velocity `u`,
-    /// with the precomputed inverse block.
+    /// The local update `r <- P(r - rho u)` for the current local velocity
+    /// `u`, with `P` the projection of Coulomb's law: `r_n = max(0, y_n)`,
+    /// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`.
+    /// A fixed point satisfies Signorini (eq. 8) and Coulomb (eq. 9) for any
+    /// `rho > 0`. With `rho = 1 / w_c` this is the exact solution of the
+    /// one-contact problem, [`super::cone::solve_isotropic`] (as `u` is affine
+    /// in `r` with slope `w_c I`); `rho = omega / w_c` over-relaxes it.
     #[inline(always)]
-    fn local_solve(&self, u: &Vector3<f64>) -> Vector3<f64> {
-        let u0 = u - self.w * self.r;
-        let rn = -u0.x * self.inv_w;
-        if rn <= 0.0 {
+    fn update(&self, u: &Vector3<f64>, rho: f64) -> Vector3<f64> {
+        let y = self.r - rho * u;
+        if y.x <= 0.0 {
             return Vector3::zeros();
         }
-        let (t1, t2) = (-u0.y * self.inv_w, -u0.z * self.inv_w);
-        let (norm2, radius) = (t1 * t1 + t2 * t2, self.mu * rn);
+        let (norm2, radius) = (y.y * y.y + y.z * y.z, self.mu * y.x);
         if norm2 <= radius * radius {
-            Vector3::new(rn, t1, t2)
+            y
         } else {
             let k = radius / norm2.sqrt();
-            Vector3::new(rn, k * t1, k * t2)
-        }
-    }
-}
-
-impl Row {
-    /// The over-relaxed force `r + omega (r_gs - r)` projected onto the
-    /// friction cone (`r_n >= 0`, `|r_t| <= mu r_n`); `r_gs` itself when
-    /// `omega = 1`.
-    #[inline(always)]
-    fn relax(&self, r_gs: Vector3<f64>, omega: f64) -> Vector3<f64> {
-        if omega == 1.0 {
-            return r_gs;
-        }
-        let x = self.r + omega * (r_gs - self.r);
-        if x.x <= 0.0 {
-            return Vector3::zeros();
-        }
-        let (norm2, radius) = (x.y * x.y + x.z * x.z, self.mu * x.x);
-        if norm2 <= radius * radius {
-            x
-        } else {
-            let k = radius / norm2.sqrt();
-            Vector3::new(x.x, k * x.y, k * x.z)
+            Vector3::new(y.x, k * y.y, k * y.z)
         }
     }
 }
@@ -332,7 +313,7 @@ impl GaussSeidel {
             let (mut max_change2, mut max_force2) = (0.0f64, 0.0f64);
             for &c in &self.order {
                 let row = &mut self.rows[c];
-                let r = row.relax(row.local_solve(&row.velocity(&self.dv)), options.relaxation);
+                let r = row.update(&row.velocity(&self.dv), options.relaxation * row.inv_w);
                 let change = r - row.r;
                 row.push(&change, &mut self.dv);
                 row.r = r;

@@ -210,7 +210,8 @@ impl World {
         }
     }
 
-    /// Remembers the current state so that [`World::rollback`] can return to it.
+    /// Remembers the current state (rods, contact warm start, the steppers'
+    /// reusable Newton matrices) so that [`World::rollback`] can return to it.
     pub fn checkpoint(&mut self) {
         self.saved.rods.resize_with(self.rods.len(), RodState::default);
         for (rod, state) in self.rods.iter().zip(&mut self.saved.rods) {
@@ -218,6 +219,7 @@ impl World {
         }
         self.saved.warm_ids.clone_from(&self.warm_ids);
         self.saved.warm_forces.clone_from(&self.warm_forces);
+        self.steppers.iter_mut().for_each(Stepper::checkpoint);
     }
 
     /// Returns to the last [`World::checkpoint`] (to redo a step differently).
@@ -227,6 +229,7 @@ impl World {
         }
         self.warm_ids.clone_from(&self.saved.warm_ids);
         self.warm_forces.clone_from(&self.saved.warm_forces);
+        self.steppers.iter_mut().for_each(Stepper::rollback);
     }
 
     /// The largest rod radius (the scale of contact tolerances).

@@ -111,10 +111,15 @@ pub struct Stepper {
     delta: Vec<f64>,
     q_base: Vec<f64>,
     hess: BandedSym,
-    ldlt: BandedLdlt,
-    /// The inertia coefficient `c_in` of the matrix factored in `ldlt`, while
-    /// that factorisation may be reused by the next step.
+    /// Two factorisations: `ldlt[active]` is the current one; the other takes
+    /// a new factorisation while the current one is kept for a rollback.
+    ldlt: [BandedLdlt; 2],
+    active: usize,
+    /// The inertia coefficient `c_in` of the matrix factored in
+    /// `ldlt[active]`, while that factorisation may be reused by the next step.
     factored_c_in: Option<f64>,
+    /// `(active, factored_c_in)` at the last [`Stepper::checkpoint`].
+    saved: Option<(usize, Option<f64>)>,
     factorizations: u64,
 }
 
@@ -138,8 +143,13 @@ impl Stepper {
             delta: vec![0.0; n],
             q_base: vec![0.0; n],
             hess: BandedSym::new(n, BANDWIDTH),
-            ldlt: BandedLdlt::with_capacity(n, BANDWIDTH),
+            ldlt: [
+                BandedLdlt::with_capacity(n, BANDWIDTH),
+                BandedLdlt::with_capacity(n, BANDWIDTH),
+            ],
+            active: 0,
             factored_c_in: None,
+            saved: None,
             factorizations: 0,
         }
     }
@@ -204,6 +214,21 @@ impl Stepper {
     /// step's explicit forces need not evaluate it again.
     pub fn elastic_gradient(&self, rod: &Rod) -> Option<&[f64]> {
         (self.grad_q == rod.q).then_some(&self.grad)
+    }
+
+    /// Keeps the current factorisation for [`Stepper::rollback`] (no copy: a
+    /// new factorisation goes to the other buffer).
+    pub fn checkpoint(&mut self) {
+        self.saved = Some((self.active, self.factored_c_in));
+    }
+
+    /// Returns to the factorisation kept by the last [`Stepper::checkpoint`],
+    /// so that a step redone from the same rod state repeats exactly.
+    pub fn rollback(&mut self) {
+        if let Some((active, c_in)) = self.saved {
+            self.active = active;
+            self.factored_c_in = c_in;
+        }
     }
 
     /// Newton matrices assembled and factored since the stepper was made.
@@ -280,9 +305,11 @@ impl Stepper {
                         self.hess.constrain(j);
                     }
                 }
+                if self.saved.is_some_and(|(kept, _)| kept == self.active) {
+                    self.active = 1 - self.active;
+                }
                 self.factored_c_in = None;
-                let inertia = self
-                    .ldlt
+                let inertia = self.ldlt[self.active]
                     .factor(&self.hess)
                     .map_err(|_| (NewtonFailure::Singular, iteration))?;
                 self.factored_c_in = Some(c_in);
@@ -293,7 +320,7 @@ impl Stepper {
             for j in 0..rod.ndof() {
                 self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
             }
-            self.ldlt.solve_in_place(&mut self.delta);
+            self.ldlt[self.active].solve_in_place(&mut self.delta);
             for j in 0..rod.ndof() {
                 if !rod.fixed[j] {
                     slope += self.resid[j] * self.delta[j];

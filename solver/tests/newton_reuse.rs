@@ -7,19 +7,12 @@ use solver::external::Environment;
 use solver::material::Material;
 use solver::rod::{End, Rod};
 use solver::stepper::{NewtonOptions, Stepper};
+use solver::validation::dynamics::arc;
 
 /// A rod bent into an arc, clamped at one end, whose other clamp is pulled
 /// away while it swings (L = 10 cm, h = 1 mm, K = 31), stepped `steps` times.
 fn swing(reuse: bool, steps: usize) -> (Vec<Vec<f64>>, u64) {
-    let (k, length, angle) = (31, 0.1, 1.5);
-    let r = length / angle;
-    let nodes: Vec<Vector3<f64>> = (0..k)
-        .map(|i| {
-            let a = angle * (i as f64 / (k - 1) as f64 - 0.5);
-            Vector3::new(r * a.sin(), r * (1.0 - a.cos()), 0.0)
-        })
-        .collect();
-    let mut rod = Rod::new(&nodes, 1e-3, Material::default()).expect("valid arc");
+    let mut rod = Rod::new(&arc(31, 0.1, 1.5), 1e-3, Material::default()).expect("valid arc");
     rod.clamp(End::Start);
     rod.clamp(End::Finish);
     rod.move_clamp(End::Finish, Vector3::new(0.02, 0.0, 0.01));

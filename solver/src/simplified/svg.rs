@@ -545,6 +545,28 @@ fn project(v: &Vector3<f64>, azimuth: f64, elevation: f64) -> (f64, f64) {
     (right, ce * v.z - se * depth)
 }
 
+/// Opening of a `w` x `h` schematic: white background, an arrow-head marker
+/// (`url(#arrow)`) and a centred title.
+fn figure_header(w: f64, h: f64, title: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="13">"#
+    );
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="black"/></marker></defs>"#
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="22" text-anchor="middle" font-size="14">{}</text>"#,
+        w / 2.0,
+        escape(title)
+    );
+    s
+}
+
 fn path(points: &[(f64, f64)], map: &dyn Fn((f64, f64)) -> (f64, f64)) -> String {
     points
         .iter()
@@ -602,22 +624,7 @@ fn side_view(
     let scale = ((w - 120.0) / (x1 - x0)).min((h - 100.0) / (y1 - y0));
     let map = |(x, y): (f64, f64)| (50.0 + (x - x0) * scale, 50.0 + (y1 - y) * scale);
     let tube = 2.0 * scale;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="13">"#
-    );
-    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="black"/></marker></defs>"#
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="22" text-anchor="middle" font-size="14">{}</text>"#,
-        w / 2.0,
-        escape(title)
-    );
+    let mut s = figure_header(w, h, title);
     let (a0, a1) = (map(axis[0]), map(axis[1]));
     let _ = writeln!(
         s,
@@ -728,21 +735,7 @@ fn top_view(params: &Params, braid: &Braid, theta: f64) -> String {
     let map = |v: &Vector3<f64>| (cx + scale * v.x, cy - scale * v.y);
     let zero = LoopBoundary::new(params.n, params.phi, 0.0, braid.l_b_bar, params.end_twist);
     let now = LoopBoundary::new(params.n, params.phi, theta, braid.l_b_bar, params.end_twist);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="sans-serif" font-size="13">"#
-    );
-    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="7" markerHeight="7" orient="auto"><path d="M0,0 L10,5 L0,10 z" fill="black"/></marker></defs>"#
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="22" text-anchor="middle" font-size="14">(b) view down z: braid ends turned by ∓θ</text>"#,
-        w / 2.0
-    );
+    let mut s = figure_header(w, h, "(b) view down z: braid ends turned by ∓θ");
     for (a, b, t) in [((-1.8, 0.0), (1.8, 0.0), "x"), ((0.0, -1.8), (0.0, 1.8), "y")] {
         let p = map(&Vector3::new(a.0, a.1, 0.0));
         let q = map(&Vector3::new(b.0, b.1, 0.0));

@@ -283,7 +283,11 @@ impl Stepper {
         };
         let mut phi = self.residual_and_potential(rod, h, c_in, energies.total());
         let mut scaled = scaled_norm(rod, &self.resid, f_tol, m_tol);
-        let mut negative_pivots = 0;
+        // A reused matrix keeps the inertia it was factored with.
+        let mut negative_pivots = match self.ldlt[self.active].inertia() {
+            Some(inertia) if reuse => inertia.negative,
+            _ => 0,
+        };
         let mut hessian_current = !reuse;
         let mut stale = reuse;
         for iteration in 0..self.options.max_iterations {

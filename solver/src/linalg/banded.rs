@@ -235,6 +235,7 @@ pub struct BandedLdlt {
     n: usize,
     kd: usize,
     factored: bool,
+    inertia: Inertia,
     l: Vec<f64>,
     d: Vec<f64>,
     d_inv: Vec<f64>,
@@ -447,7 +448,13 @@ impl BandedLdlt {
             negative,
         };
         self.factored = true;
+        self.inertia = inertia;
         Ok(inertia)
+    }
+
+    /// The inertia of the last successful factorisation (`None` if there is none).
+    pub fn inertia(&self) -> Option<Inertia> {
+        self.factored.then_some(self.inertia)
     }
 
     /// Solves `A x = b` in place with the last successful factorisation.
@@ -638,6 +645,7 @@ mod tests {
                     negative
                 }
             );
+            assert_eq!(ldlt.inertia(), Some(inertia));
             let mut x = b.clone();
             ldlt.solve_in_place(&mut x);
             assert!(
@@ -733,6 +741,7 @@ mod tests {
             Err(FactorError::SmallPivot { index, .. }) => assert_eq!(index, n - 1),
             other => panic!("expected SmallPivot, got {other:?}"),
         }
+        assert_eq!(ldlt.inertia(), None);
         assert!(matches!(
             ldlt.factor(&BandedSym::new(3, 1)),
             Err(FactorError::SmallPivot { index: 0, .. })

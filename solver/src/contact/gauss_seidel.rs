@@ -163,8 +163,8 @@ struct Row {
     /// Velocity change of each node per unit force, `dt inv_mass_k w_ck`.
     push: [f64; 4],
     frame: ContactFrame,
-    /// Isotropic diagonal block `w_c` of `W` and its inverse (0 when `w_c = 0`).
-    w: f64,
+    /// Inverse of the isotropic diagonal block `w_c` of `W`; 0 when `w_c = 0`
+    /// (both bodies fixed: the contact cannot act).
     inv_w: f64,
     mu: f64,
     /// Local relative velocity of the free step, gap term included.
@@ -292,7 +292,6 @@ impl GaussSeidel {
                 weights: contact.weights,
                 push: std::array::from_fn(|k| dt * inv_mass[contact.nodes[k]] * contact.weights[k]),
                 frame,
-                w,
                 inv_w: if w > 0.0 { 1.0 / w } else { 0.0 },
                 mu: contact.mu,
                 free,
@@ -346,7 +345,7 @@ impl GaussSeidel {
     /// (they cannot act).
     fn residual(&self) -> f64 {
         let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
-        for row in self.rows.iter().filter(|row| row.w > 0.0) {
+        for row in self.rows.iter().filter(|row| row.inv_w > 0.0) {
             let u = row.velocity(&self.dv);
             max_residual = max_residual.max(natural_map_residual(&row.r, &u, row.mu, row.inv_w));
             max_force = max_force.max(row.r.norm());
@@ -355,7 +354,7 @@ impl GaussSeidel {
     }
 }
 
-/// The contacts that can act (`w_c > 0`), evens first, then odds. Contacts
+/// The contacts that can act (`w_c > 0`, stored as `inv_w > 0`), evens first, then odds. Contacts
 /// come from detection sorted by segment pair, so neighbours in that list
 /// usually share nodes and each update would wait for the previous one's
 /// velocity correction; two apart they rarely do, and the processor overlaps
@@ -363,7 +362,7 @@ impl GaussSeidel {
 fn sweep_order(rows: &[Row], order: &mut Vec<usize>) {
     order.clear();
     for parity in [0, 1] {
-        order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].w > 0.0));
+        order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].inv_w > 0.0));
     }
 }
 

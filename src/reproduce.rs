@@ -5,7 +5,7 @@ use crate::plot::{Curve, line_chart};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use solver::case::CaseParams;
+use solver::case::{CaseParams, FrictionLaw};
 use solver::protocol::{self, CaseReport, Status};
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -44,7 +44,26 @@ fn jobs() -> Vec<Job> {
         job("n1", |p| p.n = 1),
         job("n2", |p| p.n = 2),
         job("n4", |p| p.n = 4),
+        job("n5", |p| p.n = 5),
     ];
+    // Sensitivity of the n = 3 and n = 4 inversions (docs/FIDELITY.md).
+    for (n, keys) in [
+        (3, ["n3_mu0", "n3_sliding", "n3_gravity"]),
+        (4, ["n4_mu0", "n4_sliding", "n4_gravity"]),
+    ] {
+        v.push(job(keys[0], |p| {
+            p.n = n;
+            p.mu = 0.0;
+        }));
+        v.push(job(keys[1], |p| {
+            p.n = n;
+            p.friction_law = FrictionLaw::SlidingDirection;
+        }));
+        v.push(job(keys[2], |p| {
+            p.n = n;
+            p.gravity = [0.0, 0.0, -9.81];
+        }));
+    }
     for (key, h) in [
         ("h2.0", 2.0e-3),
         ("h2.4", 2.4e-3),
@@ -103,6 +122,14 @@ fn command(p: &CaseParams) -> String {
     }
     if p.contact_tolerance != d.contact_tolerance {
         write!(s, " --contact-tolerance {:e}", p.contact_tolerance).ok();
+    }
+    if p.friction_law != d.friction_law {
+        let law = serde_json::to_value(p.friction_law).unwrap_or_default();
+        write!(s, " --friction-law {}", law.as_str().unwrap_or_default()).ok();
+    }
+    if p.gravity != d.gravity {
+        let [x, y, z] = p.gravity;
+        write!(s, " --gravity {x},{y},{z}").ok();
     }
     s
 }
@@ -201,12 +228,34 @@ fn report(get: &Lookup) -> Result<String> {
     let mut rows: Vec<(String, String, String, bool)> = Vec::new();
     let base = get("n3").map(|(_, r)| r).context("base case missing")?;
     let base_l = inversion(base);
-    rows.push((
-        "n = 3, h = 1.6 mm: inversion at l_k bar in [115, 160] (paper: near 130-140, l_c/L 0.78-0.79)".into(),
-        command(&get("n3").unwrap().0.params),
-        describe(base),
-        base_l.is_some_and(|l| (115.0..=160.0).contains(&l)),
-    ));
+    // The paper's Fig. 1 (experiments and its simulations, L = 1 m, h = 1.6 mm,
+    // mu = 0.1): n = 3 open at l_c/L 0.78 and inverted at 0.79, n = 4 open at
+    // 0.66 and inverted at 0.68; the acceptance ranges (fidelity issue) bracket them.
+    for (key, lo, hi, fig) in [
+        (
+            "n3",
+            125.0,
+            145.0,
+            "open at l_c/L 0.78, inverted at 0.79: l_k bar 131-138",
+        ),
+        (
+            "n4",
+            190.0,
+            225.0,
+            "open at 0.66, inverted at 0.68: l_k bar 200-212",
+        ),
+    ] {
+        let (j, r) = get(key).context("Fig. 1 case missing")?;
+        rows.push((
+            format!(
+                "n = {}, h = 1.6 mm: inversion at l_k bar in [{lo}, {hi}] (paper Fig. 1: {fig})",
+                j.params.n
+            ),
+            command(&j.params),
+            describe(r),
+            inversion(r).is_some_and(|l| (lo..=hi).contains(&l)),
+        ));
+    }
     let n1 = get("n1").map(|(_, r)| r).context("n1 missing")?;
     rows.push((
         "n = 1: no inversion".into(),
@@ -214,15 +263,15 @@ fn report(get: &Lookup) -> Result<String> {
         describe(n1),
         n1.status == Status::Completed && n1.inversion.is_none(),
     ));
-    let ns: Vec<Option<f64>> = ["n2", "n3", "n4"]
+    let ns: Vec<Option<f64>> = ["n2", "n3", "n4", "n5"]
         .iter()
         .map(|k| get(k).and_then(|(_, r)| inversion(r)))
         .collect();
     let grows = ns.iter().all(Option::is_some) && ns.windows(2).all(|w| w[1] > w[0]);
     rows.push((
-        "n = 2, 3, 4 at h = 1.6 mm: critical l_k bar grows with n (paper: n = 4 near l_c/L 0.66-0.68)".into(),
-        "knotsweep run --n 2 / 3 / 4".into(),
-        ["n2", "n3", "n4"]
+        "n = 2 ... 5 at h = 1.6 mm: critical l_k bar grows with n (paper Fig. 9)".into(),
+        "knotsweep run --n 2 / 3 / 4 / 5".into(),
+        ["n2", "n3", "n4", "n5"]
             .iter()
             .map(|k| {
                 format!(
@@ -341,6 +390,35 @@ fn report(get: &Lookup) -> Result<String> {
         )?;
     }
     writeln!(doc, "\n{passed} passed, {} failed\n", rows.len() - passed)?;
+    writeln!(
+        doc,
+        "## Sensitivity of the n = 3 and n = 4 inversions\n\nNot checks: what moves the inversion, for the open fidelity question of docs/FIDELITY.md (the paper's Fig. 1: n = 3 at l_k bar 131-138, n = 4 at 200-212).\n\n| variant | command | n = 3 | n = 4 |\n|---|---|---|---|"
+    )?;
+    for (what, k3, k4) in [
+        ("defaults (isotropic Coulomb friction, mu = 0.1)", "n3", "n4"),
+        ("no friction (mu = 0)", "n3_mu0", "n4_mu0"),
+        (
+            "friction only along the previous sliding direction (fails the capstan check)",
+            "n3_sliding",
+            "n4_sliding",
+        ),
+        (
+            "gravity 9.81 m/s^2 along -z, across the pull",
+            "n3_gravity",
+            "n4_gravity",
+        ),
+    ] {
+        let (j3, r3) = get(k3).context("sensitivity case missing")?;
+        let (_, r4) = get(k4).context("sensitivity case missing")?;
+        let cmd = command(&j3.params).replace(" --n 3", "");
+        writeln!(
+            doc,
+            "| {what} | `{cmd} --n 3 / 4` | {} | {} |",
+            describe(r3),
+            describe(r4)
+        )?;
+    }
+    writeln!(doc)?;
     writeln!(
         doc,
         "F bar and H bar against l_k bar for n = 1..4 (paper Fig. 8 a, b):\n\n![F bar](validation/n_sweep_F_bar.svg)\n![H bar](validation/n_sweep_H_bar.svg)"

@@ -23,6 +23,14 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     mu: Option<f64>,
+    /// Friction law: isotropic (Coulomb's disk) or sliding_direction (along the previous sliding direction only) [default isotropic].
+    #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    friction_law: Option<String>,
+    /// Gravity (m/s^2) as gx,gy,gz [default 0,0,0, as in the paper's simulations].
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gravity: Option<Vec<f64>>,
     /// Rod length L (m) [default 1].
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -228,6 +228,7 @@ impl Core {
             varied: record.varied.clone(),
             base,
             solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
+            physics_revision: solver::case::PHYSICS_REVISION,
             points: d
                 .cases
                 .into_iter()

@@ -13,6 +13,14 @@ pub const PARAM_DOCS: &[(&str, &str)] = &[
     ("n", "Number of passes (unknotting number): an integer in 1..=8."),
     ("h", "Rod radius h (m): positive and below L/50. Paper: 1.6 mm."),
     ("mu", "Coulomb friction coefficient: 0..=2. Paper: 0.1."),
+    (
+        "friction_law",
+        "Which tangential forces friction may take (eqs. 9-10): \"isotropic\" (default: Coulomb's disk |F_t| <= mu F_n) or \"sliding_direction\" (only along the previous step's sliding direction; fails the capstan check, kept for sensitivity studies, docs/FIDELITY.md).",
+    ),
+    (
+        "gravity",
+        "Gravitational acceleration (m/s^2), three components each in [-1000, 1000]. Default [0, 0, 0], as in the paper's simulations; the pull is along x.",
+    ),
     ("length", "Rod length L (m): 0.05..=100. Paper: 1 m."),
     (
         "nodes",
@@ -78,6 +86,7 @@ fn param_schema(name: &str, default: &Value) -> Schema {
         Value::Number(_) => SchemaType::Type(Type::Number),
         Value::Null => SchemaType::from_iter([Type::Number, Type::Null]),
         Value::Bool(_) => SchemaType::Type(Type::Boolean),
+        Value::Array(_) => SchemaType::Type(Type::Array),
         _ => SchemaType::Type(Type::String),
     };
     let doc = PARAM_DOCS

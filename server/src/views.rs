@@ -169,6 +169,9 @@ pub struct PhaseDiagram {
     #[schema(schema_with = crate::openapi::case_params_ref)]
     pub base: Value,
     pub solver_version: String,
+    /// The physics revision the points were computed under (part of every
+    /// case's cache key; `solver::case::PHYSICS_REVISION`).
+    pub physics_revision: u32,
     pub points: Vec<PhasePoint>,
 }
 

@@ -77,6 +77,7 @@ fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
                 normal: Vector3::z(),
                 gap: -1e-4,
                 mu: 0.1,
+                sliding_direction: Vector3::zeros(),
             }
         })
         .collect();

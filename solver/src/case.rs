@@ -1,6 +1,14 @@
 //! The one definition of a knot case's parameters, with the paper's defaults,
 //! shared by the CLI, the API, the queue and the solver. SI units.
+pub use crate::contact::FrictionLaw;
 use serde::{Deserialize, Serialize};
+
+/// Revision of the physics: raised whenever a change to the model or its
+/// defaults changes results, and part of every case's cache key, so that
+/// results computed under older physics are never served as current.
+/// Revision 1: the model of docs/VALIDATION.md (isotropic Coulomb friction,
+/// adaptive time step, over-relaxed contact solve).
+pub const PHYSICS_REVISION: u32 = 1;
 
 /// Parameters of one overhand-knot tightening case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -12,6 +20,12 @@ pub struct CaseParams {
     pub h: f64,
     /// Coulomb friction coefficient mu; paper: 0.1.
     pub mu: f64,
+    /// Which tangential forces friction may take (eqs. 9-10): `isotropic`
+    /// (Coulomb's disk |F_t| <= mu F_n, default) or `sliding_direction` (only
+    /// along the previous step's sliding direction; fails the capstan check).
+    pub friction_law: FrictionLaw,
+    /// Gravitational acceleration (m/s^2), a vector; the paper's simulations: zero.
+    pub gravity: [f64; 3],
     /// Rod length L (m); paper: 1 m.
     pub length: f64,
     /// Node count K; paper: 301.
@@ -63,6 +77,8 @@ impl Default for CaseParams {
             n: 3,
             h: 1.6e-3,
             mu: 0.1,
+            friction_law: FrictionLaw::default(),
+            gravity: [0.0; 3],
             length: 1.0,
             nodes: 301,
             youngs_modulus: 1.8e6,
@@ -134,6 +150,14 @@ impl CaseParams {
             finite_in(self.mu, 0.0, 2.0),
             "mu",
             format!("must be in [0, 2], got {}", self.mu),
+        );
+        check(
+            self.gravity.iter().all(|g| g.is_finite() && g.abs() <= 1e3),
+            "gravity",
+            format!(
+                "each component must be in [-1000, 1000] m/s^2, got [{}, {}, {}]",
+                self.gravity[0], self.gravity[1], self.gravity[2]
+            ),
         );
         check(
             (51..=4001).contains(&self.nodes),

@@ -12,9 +12,10 @@
 //!
 //! Contact forces couple rods only through step 3, so each rod's Newton system
 //! stays banded and a step costs O(K) plus O(contacts * sweeps).
+use crate::contact::FrictionLaw;
 use crate::contact::broad_phase::{BroadPhase, CandidatePair, Segment, neighbour_gap};
 use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions};
-use crate::contact::segment::closest_points;
+use crate::contact::segment::{SegmentPair, closest_points};
 use crate::counters::Counters;
 use crate::energies::{self, Terms};
 use crate::external::{Environment, gravity};
@@ -31,6 +32,8 @@ pub struct ContactOptions {
     pub enabled: bool,
     /// Coulomb friction coefficient mu, eq. (9).
     pub friction: f64,
+    /// Which tangential forces the friction bound admits (eqs. 9-10).
+    pub friction_law: FrictionLaw,
     /// Detection margin added to r_a + r_b, as a fraction of the largest radius;
     /// the margin also grows with the fastest node's travel over the step.
     pub margin: f64,
@@ -47,6 +50,7 @@ impl Default for ContactOptions {
         Self {
             enabled: true,
             friction: 0.1,
+            friction_law: FrictionLaw::default(),
             margin: 0.25,
             penetration_recovery: 1.0,
             solver: GaussSeidelOptions::default(),
@@ -128,6 +132,26 @@ fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
         }
     }
     false
+}
+
+/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of the relative
+/// velocity of the closest points (A relative to B) at the start of the
+/// step; zero when there is none.
+fn sliding_direction(
+    rods: &[Rod],
+    sa: &Segment,
+    sb: &Segment,
+    closest: &SegmentPair,
+    normal: &Vector3<f64>,
+) -> Vector3<f64> {
+    let (ra, rb) = (&rods[sa.body], &rods[sb.body]);
+    let (s, t) = (closest.s, closest.t);
+    let u = (1.0 - s) * ra.node_velocity(sa.index) + s * ra.node_velocity(sa.index + 1)
+        - (1.0 - t) * rb.node_velocity(sb.index)
+        - t * rb.node_velocity(sb.index + 1);
+    let ut = u - normal * u.dot(normal);
+    let norm = ut.norm();
+    if norm > 0.0 { ut / norm } else { Vector3::zeros() }
 }
 
 /// Several rods, their steppers and the contact machinery with reusable buffers.
@@ -316,6 +340,9 @@ impl World {
             {
                 if c.gap < 0.0 {
                     c.gap *= self.contact.penetration_recovery;
+                }
+                if self.contact.friction_law == FrictionLaw::SlidingDirection {
+                    c.sliding_direction = sliding_direction(&self.rods, sa, sb, &p.closest, &c.normal);
                 }
                 self.contacts.push(c);
                 self.pair_ids.push((p.i, p.j));

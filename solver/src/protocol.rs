@@ -170,6 +170,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     let defaults = ContactOptions::default();
     let contact = ContactOptions {
         friction: params.mu,
+        friction_law: params.friction_law,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
             ..defaults.solver
@@ -177,7 +178,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         ..defaults
     };
     let env = Environment {
-        gravity: Vector3::zeros(),
+        gravity: Vector3::from(params.gravity),
         damping: RELAX_DAMPING,
     };
     let mut world = World::new(vec![rod], env, contact, newton);

@@ -46,3 +46,22 @@ fn interpenetrating_rods_separate_gently() {
 fn capstan_tension_ratio_is_exp_mu_phi() {
     assert_case("capstan");
 }
+
+/// The literal reading of eqs. (9)-(10) (friction only along the previous
+/// sliding direction) lets a wrap creep sideways, so the capstan's tension
+/// ratio falls far short of exp(mu phi): why it is not the default
+/// (docs/FIDELITY.md quotes the figure this prints).
+#[test]
+fn sliding_direction_friction_loses_the_capstan() {
+    let phi = std::f64::consts::PI;
+    let (ratio, expected) =
+        solver::validation::contact::capstan(0.1, phi, solver::contact::FrictionLaw::SlidingDirection)
+            .unwrap();
+    println!(
+        "capstan mu 0.1, half a turn, sliding-direction law: ratio {ratio:.3}, exp(mu phi) {expected:.3}"
+    );
+    assert!(
+        ratio < 1.0 + 0.25 * (expected - 1.0),
+        "ratio {ratio} vs {expected}"
+    );
+}

@@ -57,11 +57,12 @@ fn write_canonical(value: &serde_json::Value, out: &mut String) {
     }
 }
 
-/// The case key: hex blake3 of the solver version and the canonical parameters.
+/// The case key: hex blake3 of the solver version, the physics revision
+/// (`solver::case::PHYSICS_REVISION`) and the canonical parameters.
 pub fn case_key(params: &CaseParams) -> String {
     let mut hasher = blake3::Hasher::new();
     hasher.update(SOLVER_VERSION.as_bytes());
-    hasher.update(b"\n");
+    hasher.update(format!("\nphysics {}\n", solver::case::PHYSICS_REVISION).as_bytes());
     hasher.update(canonical_json(params).as_bytes());
     hasher.finalize().to_hex().to_string()
 }

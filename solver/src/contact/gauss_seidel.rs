@@ -31,6 +31,10 @@ pub struct ContactPoint {
     pub gap: f64,
     /// Friction coefficient `mu >= 0`.
     pub mu: f64,
+    /// Unit tangent `t` of eq. (9) that friction acts along
+    /// ([`super::FrictionLaw::SlidingDirection`]); zero: friction anywhere
+    /// in the tangent disk of radius `mu r_n` ([`super::FrictionLaw::Isotropic`]).
+    pub sliding_direction: Vector3<f64>,
 }
 
 impl ContactPoint {
@@ -52,6 +56,7 @@ impl ContactPoint {
             normal: (closest.point_a - closest.point_b) / d,
             gap: d - contact_distance,
             mu,
+            sliding_direction: Vector3::zeros(),
         })
     }
 }
@@ -129,8 +134,11 @@ pub enum ContactError {
         /// Number of nodes.
         nodes: usize,
     },
-    /// A contact has a non-unit normal, a negative `mu` or non-finite data.
-    #[error("contact {0} has a non-unit normal, a negative friction coefficient or non-finite data")]
+    /// A contact has a non-unit normal, a sliding direction that is neither
+    /// zero nor a unit tangent, a negative `mu` or non-finite data.
+    #[error(
+        "contact {0} has a non-unit normal, a sliding direction that is not a unit tangent, a negative friction coefficient or non-finite data"
+    )]
     InvalidContact(usize),
     /// A node has a negative or non-finite inverse mass or velocity.
     #[error("node {0} has an invalid inverse mass or free velocity")]
@@ -167,6 +175,8 @@ struct Row {
     /// (both bodies fixed: the contact cannot act).
     inv_w: f64,
     mu: f64,
+    /// `sliding_direction` in the local frame (zero normal component).
+    sliding: Vector3<f64>,
     /// Local relative velocity of the free step, gap term included.
     free: Vector3<f64>,
     /// Local contact force `r_c = (r_n, r_t1, r_t2)`.
@@ -195,7 +205,9 @@ impl Row {
 
     /// The local update `r <- P(r - rho u)` for the current local velocity
     /// `u`, with `P` the projection of Coulomb's law: `r_n = max(0, y_n)`,
-    /// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`.
+    /// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`,
+    /// or, with a sliding direction `t`, the point of the segment
+    /// `{a t : |a| <= mu r_n}` closest to `y_t` (eq. 10's `D`).
     /// A fixed point satisfies Signorini (eq. 8) and Coulomb (eq. 9) for any
     /// `rho > 0`. With `rho = 1 / w_c` this is the exact solution of the
     /// one-contact problem, [`super::cone::solve_isotropic`] (as `u` is affine
@@ -205,6 +217,10 @@ impl Row {
         let y = self.r - rho * u;
         if y.x <= 0.0 {
             return Vector3::zeros();
+        }
+        if self.sliding.y != 0.0 || self.sliding.z != 0.0 {
+            let a = (y.y * self.sliding.y + y.z * self.sliding.z).clamp(-self.mu * y.x, self.mu * y.x);
+            return Vector3::new(y.x, a * self.sliding.y, a * self.sliding.z);
         }
         let (norm2, radius) = (y.y * y.y + y.z * y.z, self.mu * y.x);
         if norm2 <= radius * radius {
@@ -294,6 +310,7 @@ impl GaussSeidel {
                 frame,
                 inv_w: if w > 0.0 { 1.0 / w } else { 0.0 },
                 mu: contact.mu,
+                sliding: frame.to_local(&contact.sliding_direction),
                 free,
                 r: match warm_start {
                     Some(forces) if w > 0.0 => frame.to_local(&forces[c]),
@@ -341,13 +358,20 @@ impl GaussSeidel {
     }
 
     /// Natural-map residual of the current iterate, `max_c || r_c - P_K(r_c -
-    /// u_hat_c / w_c) ||` over `max_c |r_c|`, skipping contacts with `w_c = 0`
+    /// u_hat_c / w_c) ||` (with a sliding direction, `|| r_c - P(r_c - u_c / w_c) ||`
+    /// for eq. 10's projection) over `max_c |r_c|`, skipping contacts with `w_c = 0`
     /// (they cannot act).
     fn residual(&self) -> f64 {
         let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
         for row in self.rows.iter().filter(|row| row.inv_w > 0.0) {
             let u = row.velocity(&self.dv);
-            max_residual = max_residual.max(natural_map_residual(&row.r, &u, row.mu, row.inv_w));
+            let residual = if row.sliding == Vector3::zeros() {
+                natural_map_residual(&row.r, &u, row.mu, row.inv_w)
+            } else {
+                // Eq. (10) along `t`: zero exactly at the fixed point of the local update.
+                (row.r - row.update(&u, row.inv_w)).norm()
+            };
+            max_residual = max_residual.max(residual);
             max_force = max_force.max(row.r.norm());
         }
         max_residual / max_force.max(f64::MIN_POSITIVE)
@@ -425,10 +449,14 @@ fn validate(
             .weights
             .iter()
             .chain(contact.normal.iter())
+            .chain(contact.sliding_direction.iter())
             .all(|x| x.is_finite())
             && contact.gap.is_finite();
         let unit = (contact.normal.norm() - 1.0).abs() <= NORMAL_TOL;
-        if !(finite && unit && contact.mu >= 0.0 && contact.mu.is_finite()) {
+        let t = &contact.sliding_direction;
+        let tangent = *t == Vector3::zeros()
+            || ((t.norm() - 1.0).abs() <= NORMAL_TOL && t.dot(&contact.normal).abs() <= NORMAL_TOL);
+        if !(finite && unit && tangent && contact.mu >= 0.0 && contact.mu.is_finite()) {
             return Err(ContactError::InvalidContact(c));
         }
     }
@@ -937,6 +965,56 @@ mod tests {
         );
     }
 
+    /// Eq. (10) along a sliding direction `t` (one contact between two free
+    /// unit-mass nodes pressed together): a tangential load across `t` meets
+    /// no friction, one along `t` is resisted up to mu F_n and no further.
+    #[test]
+    fn friction_along_the_sliding_direction() {
+        let (dt, mu) = (0.1, 0.3);
+        let t = Vector3::x();
+        let c = ContactPoint {
+            nodes: [0, 0, 1, 1],
+            weights: [1.0, 0.0, -1.0, 0.0],
+            normal: Vector3::z(),
+            gap: 0.0,
+            mu,
+            sliding_direction: t,
+        };
+        let inv_mass = [1.0, 1.0];
+        let solve = |v0: Vector3<f64>| {
+            let mut gs = GaussSeidel::new();
+            let v_free = [v0, Vector3::zeros()];
+            let options = GaussSeidelOptions {
+                tolerance: 1e-13,
+                max_sweeps: 1000,
+                ..GaussSeidelOptions::default()
+            };
+            let report = gs.solve(&[c], &inv_mass, &v_free, dt, &options, None).unwrap();
+            assert!(report.converged);
+            (
+                gs.contact_forces()[0],
+                v0 + gs.velocity_corrections()[0] - gs.velocity_corrections()[1],
+            )
+        };
+        // Approaching at 1 m/s and sliding across t at 0.1 m/s: W = 2 dt, so the
+        // normal force is 1 / (2 dt) = 5 N and nothing resists the sideways slide.
+        let (f, u) = solve(Vector3::new(0.0, 0.1, -1.0));
+        assert!(
+            (f.z - 5.0).abs() < 1e-9 && f.x.abs() < 1e-12 && f.y.abs() < 1e-12,
+            "{f:?}"
+        );
+        assert!((u.y - 0.1).abs() < 1e-9 && u.z.abs() < 1e-9, "{u:?}");
+        // Sliding along t slowly enough to stop within the step: it sticks.
+        let (f, u) = solve(Vector3::new(0.1, 0.0, -1.0));
+        assert!((f.x + 0.5).abs() < 1e-9 && u.x.abs() < 1e-9, "{f:?} {u:?}");
+        // Too fast to stop: friction is mu F_n = 1.5 N against t.
+        let (f, u) = solve(Vector3::new(1.0, 0.0, -1.0));
+        assert!(
+            (f.x + mu * f.z).abs() < 1e-9 && (u.x - (1.0 - 2.0 * dt * 1.5)).abs() < 1e-9,
+            "{f:?} {u:?}"
+        );
+    }
+
     #[test]
     fn repeated_node_self_block() {
         // Contact sharing node 1 between A and B (degenerate, but W_cc stays exact).
@@ -946,6 +1024,7 @@ mod tests {
             normal: Vector3::z(),
             gap: 0.0,
             mu: 0.0,
+            sliding_direction: Vector3::zeros(),
         };
         let inv_mass = [1.0, 2.0, 3.0];
         let expected = 0.25 * 1.0 + 0.2f64.powi(2) * 2.0 + 0.49 * 3.0;

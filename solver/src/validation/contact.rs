@@ -1,6 +1,7 @@
 //! Contact cases (paper Sec. 3.2): crossing rods pressed together, a short rod
 //! on an inclined fixed rod (stick/slide), the capstan equation, and energy
 //! behaviour of frictionless bounces and of initially interpenetrating rods.
+use crate::contact::FrictionLaw;
 use crate::external::Environment;
 use crate::material::Material;
 use crate::pipeline::{ContactOptions, World, WorldError};
@@ -158,8 +159,8 @@ fn quadratic_coefficient(samples: &[(f64, f64)]) -> f64 {
 /// rod of radius 20 mm, loaded by a constant tension T = 0.1 N at one end and
 /// pulled at 1 cm/s at the other once the load has been ramped in. Bending is negligible: EI / (R^2 T) = 1.5 %,
 /// with R the wrap radius. Returns (mean pulling force / T during sliding,
-/// exp(mu phi)).
-pub fn capstan(mu: f64, phi: f64) -> Result<(f64, f64), WorldError> {
+/// exp(mu phi)) under friction law `law`.
+pub fn capstan(mu: f64, phi: f64, law: FrictionLaw) -> Result<(f64, f64), WorldError> {
     let (r_fixed, r_rod) = (0.02, 0.3e-3);
     let radius = r_fixed + r_rod + 0.02 * r_rod;
     let pitch = 4.0 * r_rod;
@@ -203,6 +204,7 @@ pub fn capstan(mu: f64, phi: f64) -> Result<(f64, f64), WorldError> {
     };
     let contact = ContactOptions {
         friction: mu,
+        friction_law: law,
         ..ContactOptions::default()
     };
     let mut world = World::new(vec![rope, cylinder], env, contact, NewtonOptions::default());

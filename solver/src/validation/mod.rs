@@ -209,7 +209,7 @@ fn capstan_rows() -> Vec<CaseResult> {
     for (mu, turns) in [(0.1, 0.5), (0.3, 0.5), (0.1, 1.0), (0.3, 1.0)] {
         let phi = turns * std::f64::consts::TAU;
         let name = format!("capstan_mu{mu}_phi{}pi", 2.0 * turns);
-        match contact::capstan(mu, phi) {
+        match contact::capstan(mu, phi, crate::contact::FrictionLaw::Isotropic) {
             Ok((ratio, expected)) => rows.push(CaseResult::relative(
                 &name,
                 "tension ratio at slip exp(mu phi)",

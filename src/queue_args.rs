@@ -8,11 +8,37 @@ pub struct QueueArgs {
     /// `sweep` on the same file share the queue and reuse each other's results.
     #[arg(long, default_value = DEFAULT_DATABASE_URL)]
     pub database_url: String,
-    /// Cases run at once [default: one per core]; `serve --workers 0` runs none
-    /// (add `knotsweep worker` processes instead).
-    #[arg(long)]
+    /// Cases run at once, at most 256 [default: one per core]; `serve --workers 0`
+    /// runs none (add `knotsweep worker` processes instead). Cases are
+    /// CPU-bound: more workers than cores only share the cores.
+    #[arg(long, value_parser = parse_workers)]
     pub workers: Option<usize>,
     /// Lease length (s); workers heartbeat every third of it.
     #[arg(long, default_value_t = 30.0)]
     pub lease_seconds: f64,
+}
+
+/// Largest `--workers`: each worker is a thread running a CPU-bound case.
+pub const MAX_WORKERS: usize = 256;
+
+fn parse_workers(text: &str) -> Result<usize, String> {
+    let n: usize = text.parse().map_err(|e| format!("{e}"))?;
+    if n > MAX_WORKERS {
+        return Err(format!(
+            "at most {MAX_WORKERS} (cases are CPU-bound: one worker per core, the default, keeps every core busy)"
+        ));
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn worker_count_is_bounded() {
+        assert_eq!(super::parse_workers("4"), Ok(4));
+        assert_eq!(super::parse_workers("0"), Ok(0));
+        let err = super::parse_workers("100000").unwrap_err();
+        assert!(err.contains("at most 256"), "{err}");
+        assert!(super::parse_workers("-1").is_err());
+    }
 }

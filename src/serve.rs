@@ -29,7 +29,13 @@ pub fn run(args: Args) -> Result<()> {
         let listener = tokio::net::TcpListener::bind(&args.addr)
             .await
             .with_context(|| format!("listening on {}", args.addr))?;
-        let token = std::env::var("KNOTSWEEP_TOKEN").ok().filter(|t| !t.is_empty());
+        let token = match std::env::var("KNOTSWEEP_TOKEN") {
+            Ok(t) if t.trim().is_empty() => anyhow::bail!(
+                "KNOTSWEEP_TOKEN is set but empty: give a token, or unset it to serve without authentication"
+            ),
+            Ok(t) => Some(t),
+            Err(_) => None,
+        };
         let config = ServerConfig {
             database_url: args.queue.database_url.clone(),
             workers: args.queue.workers,

@@ -73,7 +73,11 @@ pub fn router(app: App) -> Router {
         .route("/api/cases/{id}/frames", get(case_frames))
         .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
         .fallback(not_found)
+        .layer(axum::middleware::from_fn(json_method_not_allowed))
         .layer(DefaultBodyLimit::max(limits.max_body_bytes))
+        .layer(tower_http::timeout::RequestBodyTimeoutLayer::new(
+            crate::http::BODY_READ_TIMEOUT,
+        ))
         .layer(axum::middleware::from_fn_with_state(app.clone(), auth))
         .layer(tower_http::trace::TraceLayer::new_for_http());
     api.with_state(app)
@@ -158,13 +162,45 @@ async fn auth(State(app): State<App>, request: Request, next: Next) -> Response 
             .headers()
             .get(header::AUTHORIZATION)
             .and_then(|v| v.to_str().ok())
-            .and_then(|v| v.strip_prefix("Bearer "))
-            .map(str::trim);
+            .and_then(bearer_token);
         if !given.is_some_and(|t| constant_time_eq(t.as_bytes(), token.as_bytes())) {
             return ApiError::unauthorized().into_response();
         }
     }
     next.run(request).await
+}
+
+/// The token of an `Authorization: Bearer <token>` value; the scheme is
+/// case-insensitive (RFC 9110, 11.1).
+fn bearer_token(value: &str) -> Option<&str> {
+    let (scheme, token) = value.trim().split_once(' ')?;
+    scheme.eq_ignore_ascii_case("bearer").then(|| token.trim())
+}
+
+/// Gives the router's bodiless 405 answers the JSON error body (keeping
+/// their `Allow` header).
+async fn json_method_not_allowed(request: Request, next: Next) -> Response {
+    let method = request.method().clone();
+    let response = next.run(request).await;
+    if response.status() != StatusCode::METHOD_NOT_ALLOWED {
+        return response;
+    }
+    let allow = response.headers().get(header::ALLOW).cloned();
+    let message = match allow.as_ref().and_then(|a| a.to_str().ok()) {
+        Some(a) => format!("{method} is not allowed here; allowed: {a}"),
+        None => format!("{method} is not allowed here"),
+    };
+    let mut json = ApiError::new(
+        StatusCode::METHOD_NOT_ALLOWED,
+        "method_not_allowed",
+        message,
+        vec![],
+    )
+    .into_response();
+    if let Some(a) = allow {
+        json.headers_mut().insert(header::ALLOW, a);
+    }
+    json
 }
 
 async fn not_found() -> ApiError {
@@ -251,6 +287,20 @@ async fn submit_sweep(
             vec![FieldError::new("body", reason)],
         )
     })?;
+    if let Some(ct) = headers.get(header::CONTENT_TYPE) {
+        let media = ct.to_str().unwrap_or("").split(';').next().unwrap_or("").trim();
+        if !media.eq_ignore_ascii_case("application/json") {
+            return Err(ApiError::new(
+                StatusCode::UNSUPPORTED_MEDIA_TYPE,
+                "unsupported_media_type",
+                format!("Content-Type must be application/json, got {media:?}"),
+                vec![FieldError::new("Content-Type", "must be application/json")],
+            ));
+        }
+    }
+    if headers.get_all("idempotency-key").iter().count() > 1 {
+        return Err(ApiError::bad_request("Idempotency-Key", "given more than once"));
+    }
     let key = match headers.get("idempotency-key") {
         None => None,
         Some(v) => Some(

@@ -3,6 +3,7 @@
 //! [`crate::api`] only extract, call one of these and serialise.
 use crate::error::CoreError;
 use crate::spec::{self, FieldError, Limits, SweepSpec};
+use crate::strict_json;
 use crate::views::*;
 use knotsweep_worker::pool::PoolHandle;
 use knotsweep_worker::store::{
@@ -66,7 +67,7 @@ impl Core {
                 "empty body: send a JSON object ({} is one case at the paper's defaults)".to_string(),
             ));
         }
-        let value: Value = serde_json::from_slice(body)
+        let value = strict_json::parse(body)
             .map_err(|e| CoreError::BadRequest("body".to_string(), format!("malformed JSON: {e}")))?;
         if !value.is_object() {
             return Err(CoreError::Invalid(vec![FieldError::new(

@@ -13,8 +13,10 @@
 pub mod api;
 pub mod core;
 pub mod error;
+mod http;
 pub mod openapi;
 pub mod spec;
+mod strict_json;
 pub mod views;
 
 use anyhow::Context;
@@ -51,6 +53,8 @@ pub struct ServerConfig {
     pub token: Option<String>,
     /// Poll interval of the server-sent event streams.
     pub events_interval: Duration,
+    /// Time allowed for a request's headers (slow clients are cut off).
+    pub header_read_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -64,6 +68,7 @@ impl Default for ServerConfig {
             limits: Limits::default(),
             token: None,
             events_interval: Duration::from_millis(500),
+            header_read_timeout: http::HEADER_READ_TIMEOUT,
         }
     }
 }
@@ -73,7 +78,7 @@ pub struct RunningServer {
     pub addr: SocketAddr,
     store: Arc<SqliteStore>,
     shutdown: watch::Sender<bool>,
-    http: JoinHandle<std::io::Result<()>>,
+    http: JoinHandle<()>,
     reaper: JoinHandle<()>,
     pool: Option<WorkerPool>,
 }
@@ -132,14 +137,8 @@ pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> a
         events_interval: config.events_interval,
     };
     let router = api::router(app);
-    let mut rx = shutdown_rx;
-    let http = tokio::spawn(async move {
-        axum::serve(listener, router)
-            .with_graceful_shutdown(async move {
-                let _ = rx.wait_for(|stop| *stop).await;
-            })
-            .await
-    });
+    let rx = shutdown_rx;
+    let http = tokio::spawn(http::serve(listener, router, rx, config.header_read_timeout));
     tracing::info!(%addr, workers, database = %config.database_url, "knotsweep server listening");
     Ok(RunningServer {
         addr,
@@ -174,7 +173,7 @@ impl RunningServer {
         }
         self.store.close().await;
         tracing::info!("knotsweep server stopped");
-        served.context("server task")?.context("serving")?;
+        served.context("server task")?;
         Ok(())
     }
 }

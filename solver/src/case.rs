@@ -1,6 +1,7 @@
 //! The one definition of a knot case's parameters, with the paper's defaults,
 //! shared by the CLI, the API, the queue and the solver. SI units.
 pub use crate::contact::FrictionLaw;
+use crate::knot::{self, KnotError, KnotShape, KnotSpec};
 use serde::{Deserialize, Serialize};
 
 /// Revision of the physics: raised whenever a change to the model or its
@@ -101,6 +102,12 @@ impl Default for CaseParams {
     }
 }
 
+/// Largest node count K.
+pub const MAX_NODES: usize = 4001;
+/// h >= L / this: with edges of at most 4h ([`knot::build`]) and at most
+/// [`MAX_NODES`] nodes, a thinner rod cannot be meshed.
+pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
+
 /// The paper's code's time step (s) at its edge length [`REFERENCE_EDGE`].
 pub const REFERENCE_DT: f64 = 1e-3;
 /// The paper's edge length (m): L = 1 m with K = 301 nodes.
@@ -138,10 +145,12 @@ impl CaseParams {
             format!("must be in [0.05, 100] m, got {}", self.length),
         );
         check(
-            self.h.is_finite() && self.h > 0.0 && self.h < self.length / 50.0,
+            self.h.is_finite() && self.h >= self.length / MIN_RADIUS_DIVISOR && self.h < self.length / 50.0,
             "h",
             format!(
-                "must be positive and below L/50 = {} m, got {}",
+                "must be in [L/{MIN_RADIUS_DIVISOR}, L/50) = [{}, {}) m (edges of at most 4h with at most \
+                 4001 nodes; a knot needs room in L), got {}",
+                self.length / MIN_RADIUS_DIVISOR,
                 self.length / 50.0,
                 self.h
             ),
@@ -160,9 +169,9 @@ impl CaseParams {
             ),
         );
         check(
-            (51..=4001).contains(&self.nodes),
+            (51..=MAX_NODES).contains(&self.nodes),
             "nodes",
-            format!("must be in 51..=4001, got {}", self.nodes),
+            format!("must be in 51..={MAX_NODES}, got {}", self.nodes),
         );
         check(
             finite_in(self.youngs_modulus, 1e3, 1e12),
@@ -249,7 +258,66 @@ impl CaseParams {
                 format!("must be positive, got {v}"),
             );
         }
+        if errors.is_empty()
+            && let Err(e) = self.build_knot()
+        {
+            errors.push(e);
+        }
         if errors.is_empty() { Ok(()) } else { Err(errors) }
+    }
+
+    /// The knot builder's input for this case.
+    pub fn knot_spec(&self) -> KnotSpec {
+        KnotSpec {
+            n: self.n,
+            length: self.length,
+            nodes: self.nodes,
+            radius: self.h,
+            end_to_end: self.end_to_end,
+            braid_length: self.braid_length,
+            loop_length: None,
+        }
+    }
+
+    /// Builds this case's knot ([`knot::build`], the builder itself, so
+    /// that a case accepted by [`CaseParams::validate`] can always be
+    /// built); a failure names the parameter to change.
+    pub fn build_knot(&self) -> Result<KnotShape, ParamError> {
+        knot::build(&self.knot_spec()).map_err(|e| self.knot_error(e))
+    }
+
+    fn knot_error(&self, e: KnotError) -> ParamError {
+        let braid_or_h = if self.braid_length.is_some() {
+            "braid_length"
+        } else {
+            "h"
+        };
+        let field = match &e {
+            KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => "n",
+            KnotError::InvalidParameter { name, .. } => match *name {
+                "length" => "length",
+                "radius" => "h",
+                other => other,
+            },
+            KnotError::RadiusTooLarge { .. } | KnotError::Clearance { .. } => "h",
+            KnotError::TooFewNodes { .. } => "nodes",
+            KnotError::BraidTooShort { .. }
+            | KnotError::TailsTooShort { .. }
+            | KnotError::Infeasible { .. } => braid_or_h,
+            KnotError::EndToEndOutOfRange { .. } => "end_to_end",
+        };
+        let mut reason = format!("the knot cannot be built: {e}");
+        if let KnotError::TooFewNodes { min, .. } = e
+            && min > MAX_NODES
+        {
+            reason.push_str(&format!(
+                " (more than the {MAX_NODES} allowed: use a larger h or a shorter length)"
+            ));
+        }
+        ParamError {
+            field: field.to_string(),
+            reason,
+        }
     }
 
     /// The (largest) time step: `dt` if given, else 1 ms scaled by the square of

@@ -5,7 +5,7 @@
 use crate::case::CaseParams;
 use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::external::Environment;
-use crate::knot::{self, KnotSpec};
+use crate::knot;
 use crate::material::Material;
 use crate::measurements::{self, Inversion, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World};
@@ -119,20 +119,11 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
             .join("; ");
         return report;
     }
-    let spec = KnotSpec {
-        n: params.n,
-        length: params.length,
-        nodes: params.nodes,
-        radius: params.h,
-        end_to_end: params.end_to_end,
-        braid_length: params.braid_length,
-        loop_length: None,
-    };
-    let shape = match knot::build(&spec) {
+    let shape = match params.build_knot() {
         Ok(s) => s,
         Err(e) => {
             report.status = Status::Invalid;
-            report.reason = format!("knot builder: {e}");
+            report.reason = e.to_string();
             return report;
         }
     };

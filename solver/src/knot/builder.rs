@@ -435,7 +435,7 @@ fn lengths(spec: &KnotSpec) -> Result<Lengths, KnotError> {
     if design.edge > max_edge {
         return Err(KnotError::TooFewNodes {
             nodes: spec.nodes,
-            min: (length / max_edge).ceil() as usize + 1,
+            min: ((length / max_edge).ceil() as usize).saturating_add(1),
         });
     }
     let loop_length = spec

@@ -1,0 +1,206 @@
+//! The defects found when the service was tried as a new user would (issue
+//! 15), one named test each: every one of these failed before its fix.
+mod common;
+
+use common::*;
+use reqwest::StatusCode;
+use serde_json::{Value, json};
+use std::io::{Read, Write};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_knotsweep");
+
+/// Cases the knot builder cannot build are refused at submit (422, the field
+/// and the builder's reason), and nothing is stored.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn infeasible_knots_are_refused_at_submit() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    for (base, field, says) in [
+        (json!({"nodes": 101}), "base.nodes", "need 158"),
+        (json!({"length": 100}), "base.h", "L/16000"),
+        (json!({"h": 1e-300}), "base.h", "L/16000"),
+        (json!({"h": 0.019}), "base.h", "the knot cannot be built"),
+    ] {
+        let (status, body) = post(&c, &endpoint, &json!({"base": base, "grid": {"mu": [0.1]}})).await;
+        assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{base}: {body}");
+        let fields = body["fields"].as_array().expect("fields");
+        assert!(
+            fields
+                .iter()
+                .any(|f| f["field"] == field && f["reason"].as_str().unwrap().contains(says)),
+            "{base}: want {field} saying {says:?}, got {body}"
+        );
+    }
+    let (_, listed) = get(&c, &endpoint).await;
+    assert_eq!(listed.as_array().map(Vec::len), Some(0), "{listed}");
+    server.shutdown().await.unwrap();
+}
+
+/// 405 and 404 answers carry the JSON error body; 405 keeps `Allow`.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn error_answers_are_json() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let r = c
+        .put(format!("{url}/api/sweeps"))
+        .body("{}")
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::METHOD_NOT_ALLOWED);
+    let allow = r.headers()["allow"].to_str().unwrap().to_string();
+    assert!(allow.contains("GET") && allow.contains("POST"), "{allow}");
+    let body: Value = r.json().await.expect("JSON body");
+    assert_eq!(body["error"], "method_not_allowed");
+    assert!(body["message"].as_str().unwrap().contains("PUT"), "{body}");
+    for path in ["/api/no-such-thing", "/api/sweeps/999", "/nowhere"] {
+        let (status, body) = get(&c, &format!("{url}{path}")).await;
+        assert_eq!(status, StatusCode::NOT_FOUND, "{path}");
+        assert_eq!(body["error"], "not_found", "{path}: {body}");
+    }
+    server.shutdown().await.unwrap();
+}
+
+/// Bodies that serde_json would read silently are refused: duplicate keys
+/// (400), a non-JSON media type (415), two `Idempotency-Key` headers (400).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ambiguous_requests_are_refused() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    let (status, body) = post_raw(&c, &endpoint, r#"{"preset": "fig9", "preset": "fig7"}"#, &[]).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{body}");
+    assert!(
+        body["message"].as_str().unwrap().contains("duplicate key"),
+        "{body}"
+    );
+    let r = c
+        .post(&endpoint)
+        .header("content-type", "text/plain")
+        .body(r#"{"preset": "fig9"}"#)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::UNSUPPORTED_MEDIA_TYPE);
+    let body: Value = r.json().await.unwrap();
+    assert_eq!(body["fields"][0]["field"], "Content-Type", "{body}");
+    let r = c
+        .post(&endpoint)
+        .header("content-type", "application/json")
+        .header("idempotency-key", "a")
+        .header("idempotency-key", "b")
+        .body("{}")
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::BAD_REQUEST);
+    let body: Value = r.json().await.unwrap();
+    assert_eq!(body["fields"][0]["field"], "Idempotency-Key", "{body}");
+    let (_, listed) = get(&c, &endpoint).await;
+    assert_eq!(listed.as_array().map(Vec::len), Some(0), "{listed}");
+    server.shutdown().await.unwrap();
+}
+
+/// The authentication scheme is case-insensitive (RFC 9110, 11.1).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn lowercase_bearer_is_accepted() {
+    let (_dir, db) = temp_db();
+    let mut cfg = config(&db, 0);
+    cfg.token = Some("s3cret".to_string());
+    let server = start(cfg).await;
+    let (url, c) = (server.url(), client());
+    let endpoint = format!("{url}/api/sweeps");
+    for scheme in ["bearer", "BEARER", "Bearer"] {
+        let auth = format!("{scheme} s3cret");
+        let body = json!({"base": tiny_base(), "grid": {"mu": [0.1]}, "name": scheme}).to_string();
+        let (status, body) = post_raw(&c, &endpoint, body, &[("authorization", auth.as_str())]).await;
+        assert!(status.is_success(), "{scheme}: {status} {body}");
+    }
+    let (status, _) = post_raw(&c, &endpoint, "{}", &[("authorization", "Basic s3cret")]).await;
+    assert_eq!(status, StatusCode::UNAUTHORIZED);
+    server.shutdown().await.unwrap();
+}
+
+/// A client whose headers never finish is disconnected after the header
+/// timeout instead of holding a connection forever.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn slow_clients_are_cut_off() {
+    let (_dir, db) = temp_db();
+    let mut cfg = config(&db, 0);
+    cfg.header_read_timeout = Duration::from_secs(1);
+    let server = start(cfg).await;
+    let addr = server.url().trim_start_matches("http://").to_string();
+    let closed_after = tokio::task::spawn_blocking(move || {
+        let mut s = std::net::TcpStream::connect(addr).unwrap();
+        s.write_all(b"GET /healthz HTTP/1.1\r\nHost: x\r\n").unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+        let started = Instant::now();
+        let mut buf = [0u8; 1024];
+        // Whatever the server sends (nothing, or a 408), it then closes.
+        while let Ok(n) = s.read(&mut buf) {
+            if n == 0 {
+                return Some(started.elapsed());
+            }
+        }
+        None
+    })
+    .await
+    .unwrap();
+    let after = closed_after.expect("connection still open after 20 s");
+    assert!(after < Duration::from_secs(10), "closed after {after:?}");
+    server.shutdown().await.unwrap();
+}
+
+/// An empty `KNOTSWEEP_TOKEN` would silently disable authentication: the
+/// server refuses to start and says why.
+#[test]
+fn an_empty_token_is_refused_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(BIN)
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--workers",
+            "0",
+            "--database-url",
+        ])
+        .arg(format!("sqlite://{}", dir.path().join("k.db").display()))
+        .env("KNOTSWEEP_TOKEN", "")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("KNOTSWEEP_TOKEN is set but empty"), "{err}");
+}
+
+/// `--workers` beyond the documented maximum is refused with the bound.
+#[test]
+fn unbounded_worker_counts_are_refused() {
+    let out = Command::new(BIN)
+        .args(["worker", "--workers", "100000"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("at most 256"), "{err}");
+}
+
+/// Log lines written to a file carry no ANSI colour codes.
+#[test]
+fn logs_to_a_file_have_no_colour_codes() {
+    let out = Command::new(BIN)
+        .args(["run", "--relax-time", "0.01", "--min-l-k-bar", "430", "--out"])
+        .arg(tempfile::NamedTempFile::new().unwrap().path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("running case"), "{err}");
+    assert!(!err.contains('\u{1b}'), "{err}");
+}

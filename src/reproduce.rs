@@ -48,15 +48,20 @@ fn jobs() -> Vec<Job> {
     ];
     // Sensitivity of the n = 3 and n = 4 inversions (docs/FIDELITY.md).
     for (n, keys) in [
-        (3, ["n3_mu0", "n3_sliding", "n3_gravity"]),
-        (4, ["n4_mu0", "n4_sliding", "n4_gravity"]),
+        (3, ["n3_mu0", "n3_sliding", "n3_gravity", "n3_centre"]),
+        (4, ["n4_mu0", "n4_sliding", "n4_gravity", "n4_centre"]),
     ] {
+        v.push(job(keys[3], |p| {
+            p.n = n;
+            p.rolling = false;
+        }));
         v.push(job(keys[0], |p| {
             p.n = n;
             p.mu = 0.0;
         }));
         v.push(job(keys[1], |p| {
             p.n = n;
+            p.rolling = false;
             p.friction_law = FrictionLaw::SlidingDirection;
         }));
         v.push(job(keys[2], |p| {
@@ -126,6 +131,9 @@ fn command(p: &CaseParams) -> String {
     if p.friction_law != d.friction_law {
         let law = serde_json::to_value(p.friction_law).unwrap_or_default();
         write!(s, " --friction-law {}", law.as_str().unwrap_or_default()).ok();
+    }
+    if p.rolling != d.rolling {
+        write!(s, " --rolling {}", p.rolling).ok();
     }
     if p.gravity != d.gravity {
         let [x, y, z] = p.gravity;
@@ -392,13 +400,22 @@ fn report(get: &Lookup) -> Result<String> {
     writeln!(doc, "\n{passed} passed, {} failed\n", rows.len() - passed)?;
     writeln!(
         doc,
-        "## Sensitivity of the n = 3 and n = 4 inversions\n\nNot checks: what moves the inversion, for the open fidelity question of docs/FIDELITY.md (the paper's Fig. 1: n = 3 at l_k bar 131-138, n = 4 at 200-212).\n\n| variant | command | n = 3 | n = 4 |\n|---|---|---|---|"
+        "## Sensitivity of the n = 3 and n = 4 inversions\n\nNot checks: what moves the inversion (docs/FIDELITY.md; the paper's Fig. 1: n = 3 at l_k bar 131-138, n = 4 at 200-212).\n\n| variant | command | n = 3 | n = 4 |\n|---|---|---|---|"
     )?;
     for (what, k3, k4) in [
-        ("defaults (isotropic Coulomb friction, mu = 0.1)", "n3", "n4"),
+        (
+            "defaults (Coulomb friction at the surfaces: rods roll, mu = 0.1)",
+            "n3",
+            "n4",
+        ),
+        (
+            "friction at the centre lines (no rolling; physics revision 1)",
+            "n3_centre",
+            "n4_centre",
+        ),
         ("no friction (mu = 0)", "n3_mu0", "n4_mu0"),
         (
-            "friction only along the previous sliding direction (fails the capstan check)",
+            "at the centre lines, only along the previous sliding direction (fails the capstan check)",
             "n3_sliding",
             "n4_sliding",
         ),

@@ -27,6 +27,10 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     friction_law: Option<String>,
+    /// Friction at the rods' surfaces, so rods roll on each other; false: at the centre lines [default true].
+    #[arg(long)]
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rolling: Option<bool>,
     /// Gravity (m/s^2) as gx,gy,gz [default 0,0,0, as in the paper's simulations].
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -55,7 +59,7 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     pull_speed: Option<f64>,
-    /// Time step (s), the largest one when adaptive [default: 1e-3 at L = 1 m, K = 301, scaled with the squared edge length].
+    /// Time step (s), the largest one when adaptive [default: 5e-4 at L = 1 m, K = 301, scaled with the squared edge length].
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     dt: Option<f64>,

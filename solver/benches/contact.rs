@@ -78,6 +78,7 @@ fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
                 gap: -1e-4,
                 mu: 0.1,
                 sliding_direction: Vector3::zeros(),
+                spin: [(0, Vector3::zeros()); 2],
             }
         })
         .collect();

@@ -7,9 +7,10 @@ use serde::{Deserialize, Serialize};
 /// Revision of the physics: raised whenever a change to the model or its
 /// defaults changes results, and part of every case's cache key, so that
 /// results computed under older physics are never served as current.
-/// Revision 1: the model of docs/VALIDATION.md (isotropic Coulomb friction,
-/// adaptive time step, over-relaxed contact solve).
-pub const PHYSICS_REVISION: u32 = 1;
+/// Revision 1: the model of session 3 (friction at the centre lines).
+/// Revision 2: friction at the surfaces, so rods roll on each other
+/// (`rolling`, docs/FIDELITY.md).
+pub const PHYSICS_REVISION: u32 = 2;
 
 /// Parameters of one overhand-knot tightening case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -25,6 +26,11 @@ pub struct CaseParams {
     /// (Coulomb's disk |F_t| <= mu F_n, default) or `sliding_direction` (only
     /// along the previous step's sliding direction; fails the capstan check).
     pub friction_law: FrictionLaw,
+    /// Friction acts at the rods' surfaces (default): a contact's slip
+    /// includes the surfaces' spin about each rod's axis, and friction
+    /// torques the twist, so a rod can roll on another. `false`: friction
+    /// at the centre lines (no rolling).
+    pub rolling: bool,
     /// Gravitational acceleration (m/s^2), a vector; the paper's simulations: zero.
     pub gravity: [f64; 3],
     /// Rod length L (m); paper: 1 m.
@@ -40,7 +46,7 @@ pub struct CaseParams {
     /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
     pub pull_speed: f64,
     /// Time step (s), the largest one with `adaptive_dt`; `None`: the automatic
-    /// step of [`CaseParams::time_step`] (1 ms, the paper's, at L = 1 m, K = 301).
+    /// step of [`CaseParams::time_step`] (0.5 ms at L = 1 m, K = 301).
     pub dt: Option<f64>,
     /// Adapt the step to the penetration (see `solver::time_step`): halve it
     /// down to dt/64 while contacts penetrate, grow it back to `dt` when calm.
@@ -79,6 +85,7 @@ impl Default for CaseParams {
             h: 1.6e-3,
             mu: 0.1,
             friction_law: FrictionLaw::default(),
+            rolling: true,
             gravity: [0.0; 3],
             length: 1.0,
             nodes: 301,
@@ -108,8 +115,12 @@ pub const MAX_NODES: usize = 4001;
 /// [`MAX_NODES`] nodes, a thinner rod cannot be meshed.
 pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
 
-/// The paper's code's time step (s) at its edge length [`REFERENCE_EDGE`].
-pub const REFERENCE_DT: f64 = 1e-3;
+/// The default (largest) time step (s) at the paper's edge length
+/// [`REFERENCE_EDGE`]: half the paper's code's 1 ms. With rods that roll, the
+/// inversion at 1 ms differs by 1.5 % from the converged one, while 0.5 ms
+/// agrees with 0.25 ms within 0.4 % (n = 3: 139.8, 137.4, 137.9; n = 4:
+/// 226.7, 223.0, 223.0 at 1, 0.5, 0.25 ms; docs/FIDELITY.md).
+pub const REFERENCE_DT: f64 = 5e-4;
 /// The paper's edge length (m): L = 1 m with K = 301 nodes.
 pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;
 
@@ -320,7 +331,7 @@ impl CaseParams {
         }
     }
 
-    /// The (largest) time step: `dt` if given, else 1 ms scaled by the square of
+    /// The (largest) time step: `dt` if given, else [`REFERENCE_DT`] scaled by the square of
     /// the edge length relative to the paper's (L = 1 m, K = 301), capped at
     /// 10 ms. The contact forces are explicit with the mass-only Delassus
     /// operator (Sec. 3.2), which resists motion with a stiffness of about

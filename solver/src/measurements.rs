@@ -182,8 +182,11 @@ pub struct InversionCriteria {
     /// ...within this many l_k bar.
     pub window: f64,
     /// Confirmation: the kinetic energy around the drop exceeds its median over
-    /// the preceding samples by at least this factor.
+    /// the preceding samples by at least this factor...
     pub kinetic_energy_spike: f64,
+    /// ...or F bar falls to at most this fraction of its value before the
+    /// drop (the "rapid decrease" of F bar at the inversion, paper Fig. 5 a).
+    pub force_drop: f64,
 }
 
 impl Default for InversionCriteria {
@@ -192,6 +195,7 @@ impl Default for InversionCriteria {
             drop_fraction: 0.6,
             window: 10.0,
             kinetic_energy_spike: 5.0,
+            force_drop: 0.8,
         }
     }
 }
@@ -202,7 +206,10 @@ impl Default for InversionCriteria {
 /// bar of the samples within `window` before it. The snap is confirmed when the
 /// peak kinetic energy from that largest-H sample to a few samples after j
 /// exceeds the median over the samples before the drop began by
-/// `kinetic_energy_spike`.
+/// `kinetic_energy_spike`, or when F bar falls within those samples to
+/// `force_drop` times its value before the drop (Fig. 5 a: F bar "rapidly
+/// decreases" at the inversion; a slow snap of rolling strands may stir little
+/// kinetic energy).
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
     for j in 1..series.len() {
         let drop = &series[j];
@@ -236,13 +243,13 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
             .map(|s| s.kinetic_energy)
             .fold(0.0, f64::max);
         let ratio = peak / median;
-        if ratio < criteria.kinetic_energy_spike {
-            continue;
-        }
         let f_after = series[j..hi]
             .iter()
             .map(|s| s.f_bar)
             .fold(f64::INFINITY, f64::min);
+        if ratio < criteria.kinetic_energy_spike && f_after > criteria.force_drop * before.f_bar {
+            continue;
+        }
         return Some(Inversion {
             l_k_bar: before.l_k_bar,
             l_c_over_l: before.l_c_over_l,
@@ -349,6 +356,23 @@ mod tests {
         assert_eq!(inv.h_bar_after, 0.4);
         assert_eq!(inv.l_k_bar, 159.0);
         assert!(inv.kinetic_energy_ratio > 100.0);
+    }
+
+    /// A snap with little kinetic energy, confirmed by the force drop.
+    #[test]
+    fn drop_with_a_force_drop_is_an_inversion() {
+        let mut s: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0))
+            .collect();
+        s.push(sample(160.0, 0.4, 2e-9, 0.7));
+        s.push(sample(159.0, 0.4, 1e-9, 0.8));
+        let inv = detect_inversion(&s, &InversionCriteria::default()).expect("detected");
+        assert_eq!(inv.l_k_bar, 161.0);
+        assert_eq!(inv.f_bar_after, 0.7);
+        let mut held = s.clone();
+        held[40].f_bar = 0.9;
+        held[41].f_bar = 0.95;
+        assert!(detect_inversion(&held, &InversionCriteria::default()).is_none());
     }
 
     #[test]

@@ -14,12 +14,12 @@
 //! stays banded and a step costs O(K) plus O(contacts * sweeps).
 use crate::contact::FrictionLaw;
 use crate::contact::broad_phase::{BroadPhase, CandidatePair, Segment, neighbour_gap};
-use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions};
+use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
 use crate::contact::segment::{SegmentPair, closest_points};
 use crate::counters::Counters;
 use crate::energies::{self, Terms};
 use crate::external::{Environment, gravity};
-use crate::rod::{Rod, RodState, node_dof};
+use crate::rod::{Rod, RodState, node_dof, theta_dof};
 use crate::stepper::{NewtonOptions, StepError, StepReport, Stepper};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -34,6 +34,11 @@ pub struct ContactOptions {
     pub friction: f64,
     /// Which tangential forces the friction bound admits (eqs. 9-10).
     pub friction_law: FrictionLaw,
+    /// Friction acts at the rods' surfaces: a contact's relative velocity
+    /// includes the touching surfaces' spin about each rod's axis (twist
+    /// rates times the radius), and friction puts a torque on each twist, so
+    /// a rod can roll on another. `false`: friction at the centre lines.
+    pub rolling: bool,
     /// Detection margin added to r_a + r_b, as a fraction of the largest radius;
     /// the margin also grows with the fastest node's travel over the step.
     pub margin: f64,
@@ -51,6 +56,7 @@ impl Default for ContactOptions {
             enabled: true,
             friction: 0.1,
             friction_law: FrictionLaw::default(),
+            rolling: true,
             margin: 0.25,
             penetration_recovery: 1.0,
             solver: GaussSeidelOptions::default(),
@@ -165,6 +171,10 @@ pub struct World {
     /// Constant external loads per rod (one entry per DOF), added to F^ext.
     pub loads: Vec<Vec<f64>>,
     node_offset: Vec<usize>,
+    /// First global edge id of each rod (twist DOFs for rolling).
+    edge_offset: Vec<usize>,
+    spin_inv_inertia: Vec<f64>,
+    spin_free: Vec<f64>,
     broad: BroadPhase,
     gauss_seidel: GaussSeidel,
     segments: Vec<Segment>,
@@ -194,10 +204,13 @@ impl World {
     pub fn new(rods: Vec<Rod>, env: Environment, contact: ContactOptions, newton: NewtonOptions) -> Self {
         let steppers = rods.iter().map(|r| Stepper::new(r, newton)).collect();
         let mut node_offset = Vec::with_capacity(rods.len());
-        let mut total = 0;
+        let mut edge_offset = Vec::with_capacity(rods.len());
+        let (mut total, mut total_edges) = (0, 0);
         for r in &rods {
             node_offset.push(total);
+            edge_offset.push(total_edges);
             total += r.nodes();
+            total_edges += r.edges();
         }
         let gaps = rods
             .iter()
@@ -217,6 +230,9 @@ impl World {
             counters: Counters::default(),
             loads,
             node_offset,
+            edge_offset,
+            spin_inv_inertia: vec![0.0; total_edges],
+            spin_free: vec![0.0; total_edges],
             broad: BroadPhase::new(),
             gauss_seidel: GaussSeidel::new(),
             segments: Vec::new(),
@@ -341,6 +357,17 @@ impl World {
                 if c.gap < 0.0 {
                     c.gap *= self.contact.penetration_recovery;
                 }
+                if self.contact.rolling {
+                    let (ea, eb) = (
+                        self.edge_offset[sa.body] + sa.index,
+                        self.edge_offset[sb.body] + sb.index,
+                    );
+                    let lever = |seg: &Segment| {
+                        let t = (seg.b - seg.a).normalize();
+                        -seg.radius * t.cross(&c.normal)
+                    };
+                    c.spin = [(ea, lever(sa)), (eb, lever(sb))];
+                }
                 if self.contact.friction_law == FrictionLaw::SlidingDirection {
                     c.sliding_direction = sliding_direction(&self.rods, sa, sb, &p.closest, &c.normal);
                 }
@@ -385,6 +412,21 @@ impl World {
                 }
                 self.v_free[off + i] = v;
             }
+            if self.contact.rolling {
+                let damp = 1.0 / (1.0 + self.env.damping * dt);
+                for e in 0..rod.edges() {
+                    let d = theta_dof(e);
+                    let k = self.edge_offset[b] + e;
+                    if rod.fixed[d] {
+                        self.spin_free[k] = rod.prescribed_velocity[d];
+                        self.spin_inv_inertia[k] = 0.0;
+                    } else {
+                        let inertia = rod.mass[d];
+                        self.spin_free[k] = damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / inertia);
+                        self.spin_inv_inertia[k] = damp / inertia;
+                    }
+                }
+            }
             force.copy_from_slice(&self.loads[b]);
         }
         // Warm start from the previous step's forces on the same segment pairs.
@@ -401,10 +443,15 @@ impl World {
             };
             self.warm.push(f);
         }
-        let solved = self.gauss_seidel.solve(
+        let spin = self.contact.rolling.then_some(SpinDofs {
+            inv_inertia: &self.spin_inv_inertia,
+            free: &self.spin_free,
+        });
+        let solved = self.gauss_seidel.solve_with_spin(
             &self.contacts,
             &self.inv_mass,
             &self.v_free,
+            spin,
             dt,
             &self.contact.solver,
             Some(&self.warm),
@@ -431,6 +478,12 @@ impl World {
                     .zip(node_forces[off + i].iter())
                 {
                     *f += n;
+                }
+            }
+            if self.contact.rolling {
+                let torques = self.gauss_seidel.spin_torques();
+                for e in 0..rod.edges() {
+                    self.forces[b][theta_dof(e)] += torques[self.edge_offset[b] + e];
                 }
             }
         }

@@ -162,6 +162,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     let contact = ContactOptions {
         friction: params.mu,
         friction_law: params.friction_law,
+        rolling: params.rolling,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
             ..defaults.solver

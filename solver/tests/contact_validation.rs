@@ -28,7 +28,7 @@ fn crossing_rods_pressed_together_never_pass_through() {
 }
 
 #[test]
-fn rod_on_inclined_rod_sticks_or_slides_per_coulomb() {
+fn rod_on_inclined_rod_rolls_sticks_or_slides_per_coulomb() {
     assert_case("inclined_rod");
 }
 

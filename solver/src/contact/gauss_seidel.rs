@@ -35,6 +35,20 @@ pub struct ContactPoint {
     /// ([`super::FrictionLaw::SlidingDirection`]); zero: friction anywhere
     /// in the tangent disk of radius `mu r_n` ([`super::FrictionLaw::Isotropic`]).
     pub sliding_direction: Vector3<f64>,
+    /// Rolling: the twist DOFs (global edge ids) of the two segments and
+    /// their levers `L`, so that a twist rate `theta_dot` adds `L theta_dot`
+    /// to the relative velocity of the touching surface points and the
+    /// force `F` puts the torque `L . F` on that twist. `L_a = -r_a t_a x n`,
+    /// `L_b = -r_b t_b x n`; zero levers: friction at the centre lines.
+    pub spin: [(usize, Vector3<f64>); 2],
+}
+
+/// The twist DOFs that contacts may spin ([`ContactPoint::spin`]): inverse
+/// rotational inertia (0: held) and contact-free twist rate of each edge.
+#[derive(Debug, Clone, Copy)]
+pub struct SpinDofs<'a> {
+    pub inv_inertia: &'a [f64],
+    pub free: &'a [f64],
 }
 
 impl ContactPoint {
@@ -57,6 +71,7 @@ impl ContactPoint {
             gap: d - contact_distance,
             mu,
             sliding_direction: Vector3::zeros(),
+            spin: [(0, Vector3::zeros()); 2],
         })
     }
 }
@@ -170,6 +185,10 @@ struct Row {
     weights: [f64; 4],
     /// Velocity change of each node per unit force, `dt inv_mass_k w_ck`.
     push: [f64; 4],
+    /// Twist DOFs, levers and twist-rate change per unit torque (`dt / I`).
+    spin_edges: [usize; 2],
+    spin_levers: [Vector3<f64>; 2],
+    spin_push: [f64; 2],
     frame: ContactFrame,
     /// Inverse of the isotropic diagonal block `w_c` of `W`; 0 when `w_c = 0`
     /// (both bodies fixed: the contact cannot act).
@@ -186,20 +205,29 @@ struct Row {
 impl Row {
     /// Current local relative velocity `u_c` given the velocity corrections.
     #[inline(always)]
-    fn velocity(&self, dv: &[Vector3<f64>]) -> Vector3<f64> {
-        let g = self.weights[0] * dv[self.nodes[0]]
+    fn velocity(&self, dv: &[Vector3<f64>], dspin: &[f64]) -> Vector3<f64> {
+        let mut g = self.weights[0] * dv[self.nodes[0]]
             + self.weights[1] * dv[self.nodes[1]]
             + self.weights[2] * dv[self.nodes[2]]
             + self.weights[3] * dv[self.nodes[3]];
+        if self.spin_push != [0.0; 2] {
+            g += self.spin_levers[0] * dspin[self.spin_edges[0]]
+                + self.spin_levers[1] * dspin[self.spin_edges[1]];
+        }
         self.free + self.frame.to_local(&g)
     }
 
     /// Adds the velocity changes caused by the local force change `dr`.
     #[inline(always)]
-    fn push(&self, dr: &Vector3<f64>, dv: &mut [Vector3<f64>]) {
+    fn push(&self, dr: &Vector3<f64>, dv: &mut [Vector3<f64>], dspin: &mut [f64]) {
         let f = self.frame.to_world(dr);
         for k in 0..4 {
             dv[self.nodes[k]] += self.push[k] * f;
+        }
+        for k in 0..2 {
+            if self.spin_push[k] != 0.0 {
+                dspin[self.spin_edges[k]] += self.spin_push[k] * self.spin_levers[k].dot(&f);
+            }
         }
     }
 
@@ -241,8 +269,12 @@ pub struct GaussSeidel {
     order: Vec<usize>,
     /// Per-node velocity corrections `sum_c dt inv_mass_k w_ck F_c`.
     dv: Vec<Vector3<f64>>,
+    /// Per-edge twist-rate corrections (rolling, [`SpinDofs`]).
+    dspin: Vec<f64>,
     forces: Vec<Vector3<f64>>,
     node_forces: Vec<Vector3<f64>>,
+    /// Per-edge contact torques `sum_c L_ce . F_c` of the last solve.
+    spin_torques: Vec<f64>,
 }
 
 /// Sweeps between checks of the natural-map residual (a pass costing about
@@ -269,6 +301,11 @@ impl GaussSeidel {
         &self.node_forces
     }
 
+    /// Per-edge torques on the twist DOFs of the last [`GaussSeidel::solve_with_spin`].
+    pub fn spin_torques(&self) -> &[f64] {
+        &self.spin_torques
+    }
+
     /// Per-node velocity corrections of the last solve: the end-of-step
     /// velocity is `v_free + correction`.
     pub fn velocity_corrections(&self) -> &[Vector3<f64>] {
@@ -286,6 +323,22 @@ impl GaussSeidel {
         options: &GaussSeidelOptions,
         warm_start: Option<&[Vector3<f64>]>,
     ) -> Result<SolveReport, ContactError> {
+        self.solve_with_spin(contacts, inv_mass, v_free, None, dt, options, warm_start)
+    }
+
+    /// [`GaussSeidel::solve`] with rolling: contacts whose levers are non-zero
+    /// also move the twist DOFs of `spin` ([`ContactPoint::spin`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_with_spin(
+        &mut self,
+        contacts: &[ContactPoint],
+        inv_mass: &[f64],
+        v_free: &[Vector3<f64>],
+        spin: Option<SpinDofs>,
+        dt: f64,
+        options: &GaussSeidelOptions,
+        warm_start: Option<&[Vector3<f64>]>,
+    ) -> Result<SolveReport, ContactError> {
         validate(contacts, inv_mass, v_free, dt, warm_start)?;
         if !(options.relaxation > 0.0 && options.relaxation < 2.0) {
             return Err(ContactError::InvalidRelaxation(options.relaxation));
@@ -293,11 +346,28 @@ impl GaussSeidel {
         let nodes = inv_mass.len();
         self.dv.clear();
         self.dv.resize(nodes, Vector3::zeros());
+        let edges = spin.map_or(0, |s| s.inv_inertia.len());
+        self.dspin.clear();
+        self.dspin.resize(edges, 0.0);
         self.rows.clear();
         for (c, contact) in contacts.iter().enumerate() {
             let frame = ContactFrame::from_normal(&contact.normal);
-            let w = dt * self_block(contact, inv_mass);
-            let mut free = frame.to_local(&gather(contact, v_free));
+            let mut spin_free = Vector3::zeros();
+            let mut spin_push = [0.0; 2];
+            let mut spin_block = 0.0;
+            if let Some(sp) = spin {
+                for (k, (e, lever)) in contact.spin.iter().enumerate() {
+                    if *lever != Vector3::zeros() && *e < edges {
+                        spin_free += lever * sp.free[*e];
+                        spin_push[k] = dt * sp.inv_inertia[*e];
+                        spin_block += spin_push[k] * lever.norm_squared();
+                    }
+                }
+            }
+            // With levers the block is no longer isotropic: its largest
+            // eigenvalue is at most the isotropic part plus the spin part.
+            let w = dt * self_block(contact, inv_mass) + spin_block;
+            let mut free = frame.to_local(&(gather(contact, v_free) + spin_free));
             free.x += if options.close_gap {
                 contact.gap
             } else {
@@ -307,6 +377,9 @@ impl GaussSeidel {
                 nodes: contact.nodes,
                 weights: contact.weights,
                 push: std::array::from_fn(|k| dt * inv_mass[contact.nodes[k]] * contact.weights[k]),
+                spin_edges: [contact.spin[0].0, contact.spin[1].0],
+                spin_levers: [contact.spin[0].1, contact.spin[1].1],
+                spin_push,
                 frame,
                 inv_w: if w > 0.0 { 1.0 / w } else { 0.0 },
                 mu: contact.mu,
@@ -317,7 +390,7 @@ impl GaussSeidel {
                     _ => Vector3::zeros(),
                 },
             };
-            row.push(&row.r, &mut self.dv);
+            row.push(&row.r, &mut self.dv, &mut self.dspin);
             self.rows.push(row);
         }
         sweep_order(&self.rows, &mut self.order);
@@ -329,9 +402,12 @@ impl GaussSeidel {
             let (mut max_change2, mut max_force2) = (0.0f64, 0.0f64);
             for &c in &self.order {
                 let row = &mut self.rows[c];
-                let r = row.update(&row.velocity(&self.dv), options.relaxation * row.inv_w);
+                let r = row.update(
+                    &row.velocity(&self.dv, &self.dspin),
+                    options.relaxation * row.inv_w,
+                );
                 let change = r - row.r;
-                row.push(&change, &mut self.dv);
+                row.push(&change, &mut self.dv, &mut self.dspin);
                 row.r = r;
                 max_change2 = max_change2.max(change.norm_squared());
                 max_force2 = max_force2.max(r.norm_squared());
@@ -343,10 +419,17 @@ impl GaussSeidel {
         self.forces.clear();
         self.node_forces.clear();
         self.node_forces.resize(nodes, Vector3::zeros());
+        self.spin_torques.clear();
+        self.spin_torques.resize(edges, 0.0);
         for row in &self.rows {
             let force = row.frame.to_world(&row.r);
             for (&k, &wk) in row.nodes.iter().zip(&row.weights) {
                 self.node_forces[k] += wk * force;
+            }
+            for k in 0..2 {
+                if row.spin_push[k] != 0.0 {
+                    self.spin_torques[row.spin_edges[k]] += row.spin_levers[k].dot(&force);
+                }
             }
             self.forces.push(force);
         }
@@ -364,7 +447,7 @@ impl GaussSeidel {
     fn residual(&self) -> f64 {
         let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
         for row in self.rows.iter().filter(|row| row.inv_w > 0.0) {
-            let u = row.velocity(&self.dv);
+            let u = row.velocity(&self.dv, &self.dspin);
             let residual = if row.sliding == Vector3::zeros() {
                 natural_map_residual(&row.r, &u, row.mu, row.inv_w)
             } else {
@@ -979,6 +1062,7 @@ mod tests {
             gap: 0.0,
             mu,
             sliding_direction: t,
+            spin: [(0, Vector3::zeros()); 2],
         };
         let inv_mass = [1.0, 1.0];
         let solve = |v0: Vector3<f64>| {
@@ -1025,6 +1109,7 @@ mod tests {
             gap: 0.0,
             mu: 0.0,
             sliding_direction: Vector3::zeros(),
+            spin: [(0, Vector3::zeros()); 2],
         };
         let inv_mass = [1.0, 2.0, 3.0];
         let expected = 0.25 * 1.0 + 0.2f64.powi(2) * 2.0 + 0.49 * 3.0;

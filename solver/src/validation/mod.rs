@@ -142,9 +142,18 @@ fn crossing_rows() -> Vec<CaseResult> {
 
 fn inclined_rows() -> Vec<CaseResult> {
     let mut rows = Vec::new();
-    for (deg, mu) in [(10.0f64, 0.3), (30.0, 0.3), (20.0, 0.1)] {
-        let name = format!("inclined_{deg}deg_mu{mu}");
-        match contact::inclined_rod(deg.to_radians(), mu) {
+    for (deg, mu, rolling) in [
+        (10.0f64, 0.3, true),
+        (30.0, 0.3, true),
+        (20.0, 0.05, true),
+        (10.0, 0.3, false),
+        (20.0, 0.1, false),
+    ] {
+        let name = format!(
+            "inclined_{deg}deg_mu{mu}_{}",
+            if rolling { "rolling" } else { "centre_line" }
+        );
+        match contact::inclined_rod(deg.to_radians(), mu, rolling) {
             Ok((a, 0.0)) => rows.push(CaseResult::with_error(
                 &name,
                 "sticks: |acceleration| / g (tan alpha < mu)",
@@ -155,7 +164,35 @@ fn inclined_rows() -> Vec<CaseResult> {
             )),
             Ok((a, expected)) => rows.push(CaseResult::relative(
                 &name,
-                "slides: acceleration g (sin a - mu cos a) (m/s^2)",
+                if rolling && deg.to_radians().tan() <= 3.0 * mu {
+                    "rolls: acceleration (2/3) g sin a (m/s^2)"
+                } else {
+                    "slides: acceleration g (sin a - mu cos a) (m/s^2)"
+                },
+                expected,
+                a,
+                0.05,
+            )),
+            Err(e) => rows.push(CaseResult::failed(&name, "acceleration", e)),
+        }
+    }
+    for (deg, mu, rolling) in [(10.0f64, 0.3, true), (30.0, 0.3, true), (30.0, 0.3, false)] {
+        let name = format!(
+            "crossbar_{deg}deg_mu{mu}_{}",
+            if rolling { "rolling" } else { "centre_line" }
+        );
+        match contact::rod_on_crossbars(deg.to_radians(), mu, rolling) {
+            Ok((a, 0.0)) => rows.push(CaseResult::with_error(
+                &name,
+                "sticks along its axis: |acceleration| / g (tan alpha < mu)",
+                0.0,
+                a,
+                (a / 9.81).abs(),
+                1e-4,
+            )),
+            Ok((a, expected)) => rows.push(CaseResult::relative(
+                &name,
+                "slides along its axis: g (sin a - mu cos a) (m/s^2)",
                 expected,
                 a,
                 0.05,

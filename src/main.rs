@@ -6,6 +6,7 @@ mod reproduce;
 mod run;
 mod serve;
 mod simplified;
+mod snapshots;
 mod sweep;
 mod validate;
 mod worker;
@@ -35,6 +36,8 @@ enum Command {
     Reproduce(reproduce::Args),
     /// The simplified knot model of paper Sec. 5.
     Simplified(simplified::Args),
+    /// Side views of the knot at given l_c / L (SVG, framed as the paper's Fig. 1).
+    Snapshots(Box<snapshots::Args>),
     /// Serve the sweep API (and run cases on this machine's cores).
     Serve(serve::Args),
     /// Add workers to the queue of a server's database.
@@ -55,6 +58,7 @@ fn main() {
         Command::Run(args) => run::run(*args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Simplified(args) => simplified::run(args),
+        Command::Snapshots(args) => snapshots::run(*args),
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),

@@ -103,13 +103,70 @@ pub struct ParamFlags {
     #[arg(long)]
     #[serde(skip_serializing_if = "Option::is_none")]
     max_force_bar: Option<f64>,
+    /// Start from this knot instead of the builder's: a text file of K = nodes
+    /// points `x y z` (m), one per line, comma or whitespace separated, extra
+    /// columns ignored, `#` comments [default: the builder's knot].
+    #[arg(long)]
+    #[serde(skip)]
+    initial_shape: Option<PathBuf>,
 }
 
 impl ParamFlags {
     /// The case parameters: the given flags over the paper's defaults.
     pub fn params(&self) -> Result<CaseParams> {
         let value = serde_json::to_value(self)?;
-        Ok(serde_json::from_value(value)?)
+        let mut params: CaseParams = serde_json::from_value(value)?;
+        if let Some(path) = &self.initial_shape {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            params.initial_shape =
+                Some(read_points(&text).with_context(|| format!("--initial-shape {}", path.display()))?);
+        }
+        Ok(params)
+    }
+}
+
+/// Points `x y z` from text: one per line, comma or whitespace separated,
+/// extra columns ignored, blank lines and `#` comments skipped.
+fn read_points(text: &str) -> Result<Vec<[f64; 3]>> {
+    let mut points = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let values: Vec<&str> = line
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|v| !v.is_empty())
+            .collect();
+        if values.len() < 3 {
+            anyhow::bail!("line {}: {} values, need x y z", k + 1, values.len());
+        }
+        let mut p = [0.0; 3];
+        for (c, v) in p.iter_mut().zip(&values) {
+            *c = v
+                .parse()
+                .with_context(|| format!("line {}: {v:?} is not a number", k + 1))?;
+        }
+        points.push(p);
+    }
+    Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_points;
+
+    #[test]
+    fn points_in_any_separator_with_extra_columns() {
+        let text = "# x y z w\n0 0 0 9\n1.5,2,-3\n\n4\t5 6, 7\n";
+        assert_eq!(
+            read_points(text).unwrap(),
+            vec![[0.0, 0.0, 0.0], [1.5, 2.0, -3.0], [4.0, 5.0, 6.0]]
+        );
+        let err = read_points("1 2\n").unwrap_err().to_string();
+        assert!(err.contains("line 1"), "{err}");
+        assert!(read_points("1 2 x\n").is_err());
     }
 }
 

@@ -82,6 +82,10 @@ pub const PARAM_DOCS: &[(&str, &str)] = &[
         "max_force_bar",
         "Stop when F bar exceeds this (the knot is tight); null: never.",
     ),
+    (
+        "initial_shape",
+        "Start from these points instead of the builder's knot: an array of K = nodes points [x, y, z] (m); the polyline must be `length` long (within 1 %), every node between the ends along the line joining them (the clamps hold the first and last points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass overhand knot. null: the builder's knot. Mind the body limit (64 KiB by default: about 700 points).",
+    ),
 ];
 
 fn param_schema(name: &str, default: &Value) -> Schema {

@@ -1,7 +1,10 @@
 //! The one definition of a knot case's parameters, with the paper's defaults,
 //! shared by the CLI, the API, the queue and the solver. SI units.
 pub use crate::contact::FrictionLaw;
+use crate::contact::broad_phase::neighbour_gap;
+use crate::contact::segment::closest_points;
 use crate::knot::{self, KnotError, KnotShape, KnotSpec};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 /// Revision of the physics: raised whenever a change to the model or its
@@ -76,6 +79,10 @@ pub struct CaseParams {
     pub stop_after_inversion: Option<f64>,
     /// Stop when F bar exceeds this (the knot is fully tight); `None`: never.
     pub max_force_bar: Option<f64>,
+    /// Start from these K = `nodes` points (m) instead of the builder's knot:
+    /// the ends are clamped where they are and pulled apart along the line
+    /// joining them. Checked like a built knot ([`CaseParams::start_shape`]).
+    pub initial_shape: Option<Vec<[f64; 3]>>,
 }
 
 impl Default for CaseParams {
@@ -105,6 +112,7 @@ impl Default for CaseParams {
             min_l_k_bar: 60.0,
             stop_after_inversion: Some(10.0),
             max_force_bar: None,
+            initial_shape: None,
         }
     }
 }
@@ -123,6 +131,14 @@ pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
 pub const REFERENCE_DT: f64 = 5e-4;
 /// The paper's edge length (m): L = 1 m with K = 301 nodes.
 pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;
+
+/// The shape a case starts from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartShape {
+    pub points: Vec<Vector3<f64>>,
+    /// A node in the middle of the knot's loop (where the braid search starts).
+    pub loop_middle: usize,
+}
 
 /// A parameter outside its documented range.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
@@ -270,7 +286,7 @@ impl CaseParams {
             );
         }
         if errors.is_empty()
-            && let Err(e) = self.build_knot()
+            && let Err(e) = self.start_shape()
         {
             errors.push(e);
         }
@@ -290,11 +306,90 @@ impl CaseParams {
         }
     }
 
-    /// Builds this case's knot ([`knot::build`], the builder itself, so
-    /// that a case accepted by [`CaseParams::validate`] can always be
-    /// built); a failure names the parameter to change.
-    pub fn build_knot(&self) -> Result<KnotShape, ParamError> {
-        knot::build(&self.knot_spec()).map_err(|e| self.knot_error(e))
+    /// The shape the case starts from: `initial_shape`, checked, or the
+    /// knot builder's ([`knot::build`] itself, so that a case accepted by
+    /// [`CaseParams::validate`] can always start); a failure names the
+    /// parameter to change.
+    pub fn start_shape(&self) -> Result<StartShape, ParamError> {
+        match &self.initial_shape {
+            Some(points) => self.check_initial_shape(points),
+            None => knot::build(&self.knot_spec())
+                .map(|shape: KnotShape| StartShape {
+                    loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
+                    points: shape.points,
+                })
+                .map_err(|e| self.knot_error(e)),
+        }
+    }
+
+    /// A user's start shape: `nodes` finite points, a polyline of length
+    /// `length` (within 1 %), every node between the two ends along the line
+    /// joining them (the clamps hold the ends), no two non-neighbouring
+    /// segments closer than 2h, and the knot type of an n-pass overhand knot.
+    fn check_initial_shape(&self, points: &[[f64; 3]]) -> Result<StartShape, ParamError> {
+        let fail = |reason: String| ParamError {
+            field: "initial_shape".to_string(),
+            reason,
+        };
+        if points.len() != self.nodes {
+            return Err(fail(format!(
+                "{} points, but nodes = {}: give one point per node",
+                points.len(),
+                self.nodes
+            )));
+        }
+        if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+            return Err(fail(format!("point {i} is not finite")));
+        }
+        let points: Vec<Vector3<f64>> = points.iter().map(|p| Vector3::from(*p)).collect();
+        let edges: Vec<f64> = points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+        if let Some(i) = edges.iter().position(|&e| e <= 0.0) {
+            return Err(fail(format!("points {i} and {} coincide", i + 1)));
+        }
+        let total: f64 = edges.iter().sum();
+        if (total - self.length).abs() > 0.01 * self.length {
+            return Err(fail(format!(
+                "the polyline is {total:.4} m long, but length = {} m (within 1 %)",
+                self.length
+            )));
+        }
+        let (first, last) = (points[0], points[points.len() - 1]);
+        let span = (last - first).norm();
+        let axis = (last - first) / span;
+        if let Some(i) = points.iter().position(|p| {
+            let s = (p - first).dot(&axis);
+            s < -1e-9 * span || s > span * (1.0 + 1e-9)
+        }) {
+            return Err(fail(format!(
+                "point {i} lies beyond an end along the line joining the ends: the clamps hold the \
+                 first and last points and pull them apart along that line"
+            )));
+        }
+        let shortest = edges.iter().cloned().fold(f64::INFINITY, f64::min);
+        let gap = neighbour_gap(2.0 * self.h, shortest);
+        for i in 0..edges.len() {
+            for j in i + gap + 1..edges.len() {
+                let d = closest_points(&points[i], &points[i + 1], &points[j], &points[j + 1]).distance;
+                if d < 2.0 * self.h * (1.0 - 1e-6) {
+                    return Err(fail(format!(
+                        "segments {i} and {j} are {d:.3e} m apart, closer than 2h = {:.3e} m",
+                        2.0 * self.h
+                    )));
+                }
+            }
+        }
+        let expected = knot::expected_determinant(self.n);
+        match knot::knot_determinant(&points) {
+            Ok(d) if d == expected => Ok(StartShape {
+                loop_middle: points.len() / 2,
+                points,
+            }),
+            Ok(d) => Err(fail(format!(
+                "knot determinant {d}, but an overhand knot with n = {} passes has {expected}",
+                self.n
+            ))),
+            Err(e) => Err(fail(format!("knot type undetermined: {e}"))),
+        }
     }
 
     fn knot_error(&self, e: KnotError) -> ParamError {
@@ -390,6 +485,52 @@ mod tests {
             ..CaseParams::default()
         };
         assert_eq!(coarse.time_step(), 1e-2);
+    }
+
+    /// The builder's own knot is a valid start shape; each broken variant is
+    /// refused with its reason.
+    #[test]
+    fn initial_shape_is_checked_like_a_built_knot() {
+        let built = CaseParams::default().start_shape().unwrap();
+        let points: Vec<[f64; 3]> = built.points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let with = |pts: Vec<[f64; 3]>| CaseParams {
+            initial_shape: Some(pts),
+            ..CaseParams::default()
+        };
+        let ok = with(points.clone());
+        assert!(ok.validate().is_ok(), "{:?}", ok.validate());
+        assert_eq!(ok.start_shape().unwrap().points, built.points);
+        let reason = |p: CaseParams| {
+            let errors = p.validate().unwrap_err();
+            assert_eq!(errors[0].field, "initial_shape");
+            errors[0].reason.clone()
+        };
+        assert!(reason(with(points[..300].to_vec())).contains("300 points, but nodes = 301"));
+        let mut nan = points.clone();
+        nan[7][1] = f64::NAN;
+        assert!(reason(with(nan)).contains("point 7 is not finite"));
+        let long: Vec<[f64; 3]> = points
+            .iter()
+            .map(|p| [1.1 * p[0], 1.1 * p[1], 1.1 * p[2]])
+            .collect();
+        assert!(reason(with(long)).contains("long, but length = 1 m"));
+        let mut beyond = points.clone();
+        beyond.swap(0, 1);
+        assert!(reason(with(beyond)).contains("beyond an end"));
+        // Nudge a braid node by h towards the nearest node of another strand.
+        let mut close = points.clone();
+        let (i, j) = (0..points.len())
+            .flat_map(|i| (i + 10..points.len()).map(move |j| (i, j)))
+            .min_by(|a, b| {
+                let d = |(i, j): (usize, usize)| (built.points[i] - built.points[j]).norm();
+                d(*a).total_cmp(&d(*b))
+            })
+            .unwrap();
+        let towards = (built.points[j] - built.points[i]).normalize() * CaseParams::default().h;
+        close[i] = (built.points[i] + towards).into();
+        assert!(reason(with(close)).contains("closer than 2h"));
+        let wrong_n = CaseParams { n: 2, ..with(points) };
+        assert!(reason(wrong_n).contains("knot determinant 7, but an overhand knot with n = 2 passes has 5"));
     }
 
     #[test]

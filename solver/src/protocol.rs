@@ -98,6 +98,15 @@ const RELAX_DAMPING: f64 = 20.0;
 /// Runs one case. `observer` sees progress after every sample and returns
 /// `false` to cancel.
 pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
+    run_observed(params, &mut |progress, _| observer(progress))
+}
+
+/// [`run`] with the rod's centre line (node positions) handed to the
+/// observer with every sample's progress.
+pub fn run_observed(
+    params: &CaseParams,
+    observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
+) -> CaseReport {
     let started = std::time::Instant::now();
     let mut report = CaseReport {
         status: Status::Completed,
@@ -119,7 +128,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
             .join("; ");
         return report;
     }
-    let shape = match params.build_knot() {
+    let shape = match params.start_shape() {
         Ok(s) => s,
         Err(e) => {
             report.status = Status::Invalid;
@@ -230,7 +239,7 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
     let mut history: VecDeque<Frame> = VecDeque::with_capacity(FRAME_HISTORY);
     let criteria = InversionCriteria::default();
     // The loop's middle node, from the builder and then tracked from each sample's braid ends.
-    let mut mid = (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2;
+    let mut mid = shape.loop_middle;
     let mut time = 0.0;
     let mut peak_kinetic_energy: f64 = 0.0;
     loop {
@@ -317,12 +326,13 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
         };
         let sample = report.series.last().copied().unwrap_or_default();
         let fraction = ((start_l_k_bar - l_k_bar) / (start_l_k_bar - stop_l)).clamp(0.0, 1.0);
-        let keep_going = observer(&Progress {
+        let progress = Progress {
             fraction,
             l_k_bar,
             h_bar: sample.h_bar,
             steps: report.stats.steps,
-        });
+        };
+        let keep_going = observer(&progress, &points);
         if !keep_going {
             return finish(
                 report,

@@ -184,8 +184,9 @@ pub struct InversionCriteria {
     /// Confirmation: the kinetic energy around the drop exceeds its median over
     /// the preceding samples by at least this factor...
     pub kinetic_energy_spike: f64,
-    /// ...or F bar falls to at most this fraction of its value before the
-    /// drop (the "rapid decrease" of F bar at the inversion, paper Fig. 5 a).
+    /// ...or a positive (pulling) F bar falls to at most this fraction of its
+    /// value before the drop (the "rapid decrease" of F bar at the
+    /// inversion, paper Fig. 5 a).
     pub force_drop: f64,
 }
 
@@ -213,7 +214,9 @@ impl Default for InversionCriteria {
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
     for j in 1..series.len() {
         let drop = &series[j];
-        if drop.width <= 0.0 {
+        // A drop is judged against a full window of history (the first
+        // samples of a pull may still carry the relaxation's transients).
+        if drop.width <= 0.0 || series[0].l_k_bar - drop.l_k_bar < criteria.window {
             continue;
         }
         let Some((start, reference)) = series[..j]
@@ -247,7 +250,8 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
             .iter()
             .map(|s| s.f_bar)
             .fold(f64::INFINITY, f64::min);
-        if ratio < criteria.kinetic_energy_spike && f_after > criteria.force_drop * before.f_bar {
+        let force_dropped = before.f_bar > 0.0 && f_after <= criteria.force_drop * before.f_bar;
+        if ratio < criteria.kinetic_energy_spike && !force_dropped {
             continue;
         }
         return Some(Inversion {
@@ -373,6 +377,11 @@ mod tests {
         held[40].f_bar = 0.9;
         held[41].f_bar = 0.95;
         assert!(detect_inversion(&held, &InversionCriteria::default()).is_none());
+        // A compressive force that grows is no force drop.
+        let mut pushed = s.clone();
+        pushed[39].f_bar = -0.004;
+        pushed[40].f_bar = -0.012;
+        assert!(detect_inversion(&pushed, &InversionCriteria::default()).is_none());
     }
 
     #[test]

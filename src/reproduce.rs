@@ -228,7 +228,7 @@ fn describe(r: &CaseReport) -> String {
     match (r.status, r.inversion) {
         (Status::Completed, Some(i)) => format!("l_k bar {:.1} (l_c/L {:.3})", i.l_k_bar, i.l_c_over_l),
         (Status::Completed, None) => "no inversion".to_string(),
-        (s, _) => format!("{s:?}: {}", r.reason),
+        (s, _) => format!("{s}: {}", r.reason),
     }
 }
 

@@ -213,7 +213,7 @@ pub fn run(args: Args) -> Result<()> {
         write_plots(&report, dir)?;
     }
     if report.status != Status::Completed {
-        anyhow::bail!("case ended with status {:?}: {}", report.status, report.reason);
+        anyhow::bail!("case ended with status {}: {}", report.status, report.reason);
     }
     Ok(())
 }
@@ -248,7 +248,7 @@ fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
 }
 
 fn summarise(report: &CaseReport) {
-    println!("status: {:?} {}", report.status, report.reason);
+    println!("status: {} {}", report.status, report.reason);
     match &report.inversion {
         Some(inv) => println!(
             "inversion at l_k bar {:.2} (l_c/L {:.4}), F bar {:.4} -> {:.4}",

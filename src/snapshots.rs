@@ -60,7 +60,7 @@ pub fn run(args: Args) -> Result<()> {
         shots.len() < targets.len()
     });
     if !matches!(report.status, Status::Completed | Status::Cancelled) {
-        bail!("case ended with status {:?}: {}", report.status, report.reason);
+        bail!("case ended with status {}: {}", report.status, report.reason);
     }
     if shots.len() < targets.len() {
         bail!(

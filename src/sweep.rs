@@ -16,11 +16,12 @@ use std::sync::Arc;
 use std::time::Duration;
 
 #[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("sweep").required(true).args(["preset", "spec"])))]
 pub struct Args {
     #[command(flatten)]
     queue: crate::queue_args::QueueArgs,
     /// A preset: fig7, fig9 or fig11 (see `GET /api/presets`).
-    #[arg(long, conflicts_with = "spec", required_unless_present = "spec")]
+    #[arg(long)]
     preset: Option<String>,
     /// A sweep specification: JSON as for `POST /api/sweeps`.
     #[arg(long)]

@@ -204,3 +204,44 @@ fn logs_to_a_file_have_no_colour_codes() {
     assert!(err.contains("running case"), "{err}");
     assert!(!err.contains('\u{1b}'), "{err}");
 }
+
+/// `sweep` with neither `--preset` nor `--spec` names both.
+#[test]
+fn sweep_without_a_specification_names_the_flags() {
+    let out = Command::new(BIN).arg("sweep").output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--preset") && err.contains("--spec"), "{err}");
+}
+
+/// A database URL of another backend is named as unsupported, once.
+#[test]
+fn unsupported_database_urls_say_so() {
+    let out = Command::new(BIN)
+        .args(["worker", "--database-url", "postgres://127.0.0.1/none"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("postgres:// databases are not supported by this build"),
+        "{err}"
+    );
+    assert_eq!(err.matches("not supported").count(), 1, "{err}");
+}
+
+/// Reasons users read carry values as users write them, not Rust's Debug
+/// forms (`None`, `Some(5)`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn reasons_have_no_debug_formatting() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let id = submit_sweep(&c, &url, &json!({"base": tiny_base()})).await;
+    wait_sweep(&c, &url, id, Duration::from_secs(60), finished).await;
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    let reason = diagram["points"][0]["reason"].as_str().unwrap().to_string();
+    assert!(reason.contains("no inversion"), "{reason}");
+    assert!(!reason.contains("None") && !reason.contains("Some("), "{reason}");
+    server.shutdown().await.unwrap();
+}

@@ -442,10 +442,16 @@ fn summary(s: &SweepRecord, counts: BTreeMap<String, i64>) -> SweepSummary {
 fn reason_of(c: &CaseRecord) -> Option<String> {
     match (&c.result, c.state) {
         (Some(r), _) if r.inversion.is_some() => None,
-        (Some(r), _) if r.outcome == "completed" => Some(format!(
-            "no inversion detected before the case stopped (min_l_k_bar {}, max_force_bar {:?})",
-            c.params.min_l_k_bar, c.params.max_force_bar
-        )),
+        (Some(r), _) if r.outcome == "completed" => Some(match c.params.max_force_bar {
+            Some(f) => format!(
+                "no inversion detected before the case stopped (at l_k bar {} or F bar {f})",
+                c.params.min_l_k_bar
+            ),
+            None => format!(
+                "no inversion detected before the case stopped (at l_k bar {})",
+                c.params.min_l_k_bar
+            ),
+        }),
         (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
         (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
         (None, CaseState::Cancelled) => Some("cancelled".to_string()),

@@ -41,8 +41,8 @@ pub struct Sample {
     /// Contacts within the detection margin and those carrying load.
     pub contacts: usize,
     pub active_contacts: usize,
-    /// Largest penetration / h.
-    pub max_penetration: f64,
+    /// Largest penetration over h (dimensionless; the CSV column of the same name).
+    pub max_penetration_over_h: f64,
     /// Newton iterations of the step that produced the sample.
     pub newton_iterations: u32,
     /// Time step (s) of the step that produced the sample.
@@ -69,7 +69,7 @@ pub fn series_csv(series: &[Sample]) -> String {
             s.kinetic_energy,
             s.contacts,
             s.active_contacts,
-            s.max_penetration,
+            s.max_penetration_over_h,
             s.newton_iterations,
             s.dt
         ));
@@ -304,6 +304,14 @@ mod tests {
         assert_eq!(lines.len(), 3);
         let columns = CSV_HEADER.split(',').count();
         assert!(lines.iter().all(|l| l.split(',').count() == columns));
+    }
+
+    /// The penetration column has one name, with its unit, in JSON and CSV.
+    #[test]
+    fn penetration_has_one_name_in_json_and_csv() {
+        let json = serde_json::to_value(Sample::default()).unwrap();
+        assert!(json.get("max_penetration_over_h").is_some());
+        assert!(CSV_HEADER.split(',').any(|c| c == "max_penetration_over_h"));
     }
 
     #[test]

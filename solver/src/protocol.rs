@@ -34,6 +34,20 @@ pub enum Status {
     Cancelled,
 }
 
+impl std::fmt::Display for Status {
+    /// The status word of the reports and the API (the serde names).
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Status::Completed => "completed",
+            Status::Invalid => "invalid",
+            Status::Diverged => "diverged",
+            Status::Penetrated => "penetrated",
+            Status::TopologyChanged => "topology_changed",
+            Status::Cancelled => "cancelled",
+        })
+    }
+}
+
 /// A centreline snapshot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Frame {
@@ -141,8 +155,8 @@ pub fn run_observed(
     if report.determinant_initial != Some(expected) {
         report.status = Status::Invalid;
         report.reason = format!(
-            "the built knot has determinant {:?}, expected {expected}",
-            report.determinant_initial
+            "the start shape has knot determinant {}, expected {expected}",
+            determinant_text(report.determinant_initial)
         );
         return report;
     }
@@ -221,7 +235,10 @@ pub fn run_observed(
     let det = knot::knot_determinant(&world.rods[0].positions()).ok();
     if det != Some(expected) {
         report.determinant_final = det;
-        let reason = format!("knot determinant {det:?} after relaxing, expected {expected}");
+        let reason = format!(
+            "knot determinant {} after relaxing, expected {expected}",
+            determinant_text(det)
+        );
         return finish(report, world, &clock, Status::TopologyChanged, reason, started);
     }
     report.frames.push(frame(&world, "relaxed", l_k_bar_of(&world)));
@@ -290,7 +307,7 @@ pub fn run_observed(
             kinetic_energy: std::mem::take(&mut peak_kinetic_energy),
             contacts: step.contacts,
             active_contacts: step.active_contacts,
-            max_penetration: step.max_penetration / params.h,
+            max_penetration_over_h: step.max_penetration / params.h,
             newton_iterations: step.newton_iterations,
             dt,
         });
@@ -317,7 +334,10 @@ pub fn run_observed(
         let det = knot::knot_determinant(&points).ok();
         if det != Some(expected) {
             report.determinant_final = det;
-            let reason = format!("knot determinant {det:?} at l_k bar {l_k_bar:.2}, expected {expected}");
+            let reason = format!(
+                "knot determinant {} at l_k bar {l_k_bar:.2}, expected {expected}",
+                determinant_text(det)
+            );
             return finish(report, world, &clock, Status::TopologyChanged, reason, started);
         }
         let stop_l = match (report.inversion, params.stop_after_inversion) {
@@ -351,12 +371,20 @@ pub fn run_observed(
     let det = knot::knot_determinant(&world.rods[0].positions()).ok();
     report.determinant_final = det;
     if det != Some(expected) {
-        let reason = format!("knot determinant {det:?} at the end, expected {expected}");
+        let reason = format!(
+            "knot determinant {} at the end, expected {expected}",
+            determinant_text(det)
+        );
         return finish(report, world, &clock, Status::TopologyChanged, reason, started);
     }
     let l_end = l_k_bar_of(&world);
     report.frames.push(frame(&world, "final", l_end));
     finish(report, world, &clock, Status::Completed, String::new(), started)
+}
+
+/// A knot determinant as users read it.
+fn determinant_text(det: Option<u64>) -> String {
+    det.map_or_else(|| "undetermined".to_string(), |d| d.to_string())
 }
 
 /// l_k bar = (L - l_c) / h (eq. 11) of the world's rod.
@@ -400,4 +428,23 @@ fn finish(
     report.stats.contact_time = world.counters.contact_solve.as_secs_f64();
     report.stats.dynamics_time = world.counters.dynamics.as_secs_f64();
     report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Status;
+
+    #[test]
+    fn status_words_are_the_serde_names() {
+        for s in [
+            Status::Completed,
+            Status::Invalid,
+            Status::Diverged,
+            Status::Penetrated,
+            Status::TopologyChanged,
+            Status::Cancelled,
+        ] {
+            assert_eq!(serde_json::to_value(s).unwrap(), s.to_string());
+        }
+    }
 }

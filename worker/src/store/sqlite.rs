@@ -58,6 +58,10 @@ impl SqliteStore {
     pub async fn connect(url: &str, options: SqliteOptions) -> StoreResult<Self> {
         let url = if url.starts_with("sqlite:") {
             url.to_string()
+        } else if let Some((scheme, _)) = url.split_once("://") {
+            return Err(StoreError::Unsupported(format!(
+                "{scheme}:// databases are not supported by this build: give a sqlite:// URL (or a file path)"
+            )));
         } else {
             format!("sqlite://{url}")
         };

@@ -8,9 +8,8 @@ pub struct QueueArgs {
     /// `sweep` on the same file share the queue and reuse each other's results.
     #[arg(long, default_value = DEFAULT_DATABASE_URL)]
     pub database_url: String,
-    /// Cases run at once, at most 256 [default: one per core]; `serve --workers 0`
-    /// runs none (add `knotsweep worker` processes instead). Cases are
-    /// CPU-bound: more workers than cores only share the cores.
+    /// Cases run at once by this process, 0 to 256 [default: one per core].
+    /// Cases are CPU-bound: more workers than cores only share the cores.
     #[arg(long, value_parser = parse_workers)]
     pub workers: Option<usize>,
     /// Lease length (s); workers heartbeat every third of it.

@@ -158,6 +158,8 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         "knotsweep_claims_total 4",
         "knotsweep_completions_total{outcome=\"completed\"} 4",
         "knotsweep_case_duration_seconds_count 4",
+        "knotsweep_sweeps{status=\"done\"} 1",
+        "knotsweep_sweeps{status=\"running\"} 0",
         "knotsweep_workers 2",
     ] {
         assert!(

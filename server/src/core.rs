@@ -355,7 +355,7 @@ impl Core {
     pub async fn metrics(&self) -> Result<String, CoreError> {
         let counts: BTreeMap<String, i64> = self.store.status_counts().await?.into_iter().collect();
         let depth = self.store.queue_depth().await?;
-        let sweeps = self.store.list_sweeps().await?;
+        let sweeps = self.list_sweeps().await?;
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -374,11 +374,22 @@ impl Core {
         );
         let _ = writeln!(
             out,
-            "# HELP knotsweep_sweeps Sweeps by state.\n# TYPE knotsweep_sweeps gauge"
+            "# HELP knotsweep_sweeps Sweeps by status (as GET /api/sweeps reports it: a sweep whose cases all finished is done).\n# TYPE knotsweep_sweeps gauge"
         );
-        for state in [SweepState::Active, SweepState::Paused, SweepState::Cancelled] {
-            let n = sweeps.iter().filter(|s| s.state == state).count();
-            let _ = writeln!(out, "knotsweep_sweeps{{state=\"{}\"}} {n}", state.as_str());
+        for status in [
+            SweepStatus::Queued,
+            SweepStatus::Running,
+            SweepStatus::Paused,
+            SweepStatus::Done,
+            SweepStatus::Cancelled,
+        ] {
+            let n = sweeps.iter().filter(|s| s.status == status).count();
+            let word = serde_json::to_value(status).expect("status serialises");
+            let _ = writeln!(
+                out,
+                "knotsweep_sweeps{{status=\"{}\"}} {n}",
+                word.as_str().unwrap_or_default()
+            );
         }
         let _ = writeln!(
             out,

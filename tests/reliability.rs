@@ -245,3 +245,42 @@ async fn reasons_have_no_debug_formatting() {
     assert!(!reason.contains("None") && !reason.contains("Some("), "{reason}");
     server.shutdown().await.unwrap();
 }
+
+/// `GET /api/sweeps` is paginated: `limit` and `offset`, the total in
+/// `X-Total-Count`, the next page in `Link`; a bad limit is a 400 naming it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sweeps_are_listed_a_page_at_a_time() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let mut ids = Vec::new();
+    for mu in [0.1, 0.2, 0.3] {
+        ids.push(submit_sweep(&c, &url, &json!({"base": tiny_base(), "grid": {"mu": [mu]}})).await);
+    }
+    let r = c.get(format!("{url}/api/sweeps?limit=2")).send().await.unwrap();
+    assert_eq!(r.headers()["x-total-count"], "3");
+    let link = r.headers()["link"].to_str().unwrap().to_string();
+    assert_eq!(link, "</api/sweeps?limit=2&offset=2>; rel=\"next\"");
+    let page: Value = r.json().await.unwrap();
+    let got: Vec<i64> = page
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["id"].as_i64().unwrap())
+        .collect();
+    assert_eq!(got, ids[..2]);
+    let r = c
+        .get(format!("{url}/api/sweeps?limit=2&offset=2"))
+        .send()
+        .await
+        .unwrap();
+    assert!(r.headers().get("link").is_none());
+    let page: Value = r.json().await.unwrap();
+    assert_eq!(page[0]["id"], ids[2]);
+    for bad in ["limit=0", "limit=5000", "limit=x"] {
+        let (status, body) = get(&c, &format!("{url}/api/sweeps?{bad}")).await;
+        assert_eq!(status, StatusCode::BAD_REQUEST, "{bad}: {body}");
+        assert_eq!(body["error"], "bad_request", "{bad}: {body}");
+    }
+    server.shutdown().await.unwrap();
+}

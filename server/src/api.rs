@@ -320,10 +320,49 @@ async fn submit_sweep(
     Ok((status, [(header::LOCATION, location)], Json(response)).into_response())
 }
 
-/// All sweeps with their counts per status.
-#[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", responses((status = 200, body = Vec<SweepSummary>)))]
-async fn list_sweeps(State(app): State<App>) -> Result<Json<Vec<SweepSummary>>, ApiError> {
-    Ok(Json(app.core.list_sweeps().await?))
+/// Largest `limit` of `GET /api/sweeps`.
+const MAX_PAGE: usize = 1000;
+
+/// One page of `GET /api/sweeps`.
+#[derive(serde::Deserialize, utoipa::IntoParams)]
+struct Page {
+    /// Sweeps per page, 1..=1000 (default 100).
+    limit: Option<usize>,
+    /// Sweeps to skip, oldest first (default 0).
+    offset: Option<usize>,
+}
+
+/// Sweeps with their counts per status, oldest first, a page at a time:
+/// `X-Total-Count` gives the number of sweeps and `Link` the next page.
+#[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", params(Page),
+    responses((status = 200, body = Vec<SweepSummary>), (status = 400, body = ErrorBody)))]
+async fn list_sweeps(
+    State(app): State<App>,
+    page: Result<axum::extract::Query<Page>, axum::extract::rejection::QueryRejection>,
+) -> Result<Response, ApiError> {
+    let page = page.map_err(|e| ApiError::bad_request("query", e.body_text()))?.0;
+    let limit = page.limit.unwrap_or(100);
+    if !(1..=MAX_PAGE).contains(&limit) {
+        return Err(ApiError::bad_request(
+            "limit",
+            format!("must be in 1..={MAX_PAGE}, got {limit}"),
+        ));
+    }
+    let offset = page.offset.unwrap_or(0);
+    let all = app.core.list_sweeps().await?;
+    let total = all.len();
+    let items: Vec<SweepSummary> = all.into_iter().skip(offset).take(limit).collect();
+    let mut response = Json(items).into_response();
+    let headers = response.headers_mut();
+    headers.insert("x-total-count", HeaderValue::from(total));
+    if offset.saturating_add(limit) < total {
+        let next = format!(
+            "</api/sweeps?limit={limit}&offset={}>; rel=\"next\"",
+            offset + limit
+        );
+        headers.insert(header::LINK, HeaderValue::from_str(&next).expect("ascii"));
+    }
+    Ok(response)
 }
 
 /// A sweep: counts per status, per-case progress, ETA.

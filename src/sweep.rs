@@ -26,7 +26,7 @@ pub struct Args {
     /// A sweep specification: JSON as for `POST /api/sweeps`.
     #[arg(long)]
     spec: Option<PathBuf>,
-    /// Sets a base parameter, e.g. `--set nodes=151` (value as JSON); repeatable.
+    /// Sets a base parameter, e.g. `--set nodes=161` (value as JSON); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
     /// Phase-diagram JSON output [default: <preset or spec file name>.json].

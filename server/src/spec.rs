@@ -381,7 +381,7 @@ mod tests {
                 .all(|c| c.params.n == 3 && c.params.h == 3.4e-3)
         );
         let coarse = expand(
-            &spec(serde_json::json!({"preset": "fig9", "base": {"nodes": 151}})),
+            &spec(serde_json::json!({"preset": "fig9", "base": {"nodes": 161}})),
             &l,
         )
         .unwrap();
@@ -389,21 +389,21 @@ mod tests {
             coarse
                 .cases
                 .iter()
-                .all(|c| c.params.nodes == 151 && c.params.h == 1.6e-3)
+                .all(|c| c.params.nodes == 161 && c.params.h == 1.6e-3)
         );
     }
 
     #[test]
     fn grid_is_the_cartesian_product_last_axis_fastest() {
         let e = expand(
-            &spec(serde_json::json!({"base": {"nodes": 151}, "grid": {"n": [1, 2], "mu": [0.1, 0.2, 0.3]}})),
+            &spec(serde_json::json!({"base": {"nodes": 161}, "grid": {"n": [1, 2], "mu": [0.1, 0.2, 0.3]}})),
             &Limits::default(),
         )
         .unwrap();
         assert_eq!(e.varied, ["mu", "n"]);
         let got: Vec<(f64, u32)> = e.cases.iter().map(|c| (c.params.mu, c.params.n)).collect();
         assert_eq!(got, [(0.1, 1), (0.1, 2), (0.2, 1), (0.2, 2), (0.3, 1), (0.3, 2)]);
-        assert!(e.cases.iter().all(|c| c.params.nodes == 151));
+        assert!(e.cases.iter().all(|c| c.params.nodes == 161));
         let single = expand(&SweepSpec::default(), &Limits::default()).unwrap();
         assert_eq!(single.cases.len(), 1);
         assert_eq!(single.cases[0].params, CaseParams::default());

@@ -81,7 +81,7 @@ pub struct CaseParams {
     pub max_force_bar: Option<f64>,
     /// Start from these K = `nodes` points (m) instead of the builder's knot:
     /// the ends are clamped where they are and pulled apart along the line
-    /// joining them. Checked like a built knot ([`CaseParams::start_shape`]).
+    /// joining them. Checked like a built knot ([`CaseParams::validated_start`]).
     pub initial_shape: Option<Vec<[f64; 3]>>,
 }
 
@@ -149,8 +149,24 @@ pub struct ParamError {
 }
 
 impl CaseParams {
-    /// Checks every documented range; returns all violations.
+    /// Checks every documented range and that the case can start
+    /// ([`CaseParams::validated_start`]); returns all violations.
     pub fn validate(&self) -> Result<(), Vec<ParamError>> {
+        self.validated_start().map(|_| ())
+    }
+
+    /// The shape the case starts from, once every range holds: the checks of
+    /// [`CaseParams::validate`] and the start shape in one pass.
+    pub fn validated_start(&self) -> Result<StartShape, Vec<ParamError>> {
+        let errors = self.range_errors();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        self.start_shape().map_err(|e| vec![e])
+    }
+
+    /// Every documented range that does not hold.
+    fn range_errors(&self) -> Vec<ParamError> {
         let mut errors = Vec::new();
         let mut check = |ok: bool, field: &str, reason: String| {
             if !ok {
@@ -285,12 +301,7 @@ impl CaseParams {
                 format!("must be positive, got {v}"),
             );
         }
-        if errors.is_empty()
-            && let Err(e) = self.start_shape()
-        {
-            errors.push(e);
-        }
-        if errors.is_empty() { Ok(()) } else { Err(errors) }
+        errors
     }
 
     /// The knot builder's input for this case.
@@ -310,7 +321,7 @@ impl CaseParams {
     /// knot builder's ([`knot::build`] itself, so that a case accepted by
     /// [`CaseParams::validate`] can always start); a failure names the
     /// parameter to change.
-    pub fn start_shape(&self) -> Result<StartShape, ParamError> {
+    fn start_shape(&self) -> Result<StartShape, ParamError> {
         match &self.initial_shape {
             Some(points) => self.check_initial_shape(points),
             None => knot::build(&self.knot_spec())

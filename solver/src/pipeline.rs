@@ -390,41 +390,35 @@ impl World {
             let force = &mut self.forces[b];
             force.copy_from_slice(&self.loads[b]);
             gravity::add(rod, &self.env.gravity, force);
+            // A free DOF's contact-free velocity, v + dt M^-1 (F - grad E),
+            // damped, and its effective inverse mass (the same rule as the stepper's).
+            let damp = 1.0 / (1.0 + self.env.damping * dt);
+            let free = |d: usize| {
+                let m = rod.mass[d];
+                (damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / m), damp / m)
+            };
             let off = self.node_offset[b];
             for i in 0..rod.nodes() {
                 let d = node_dof(i);
-                let fixed = rod.fixed[d] || rod.fixed[d + 1] || rod.fixed[d + 2];
-                let mut v = rod.node_velocity(i);
-                if fixed {
-                    v = Vector3::new(
-                        rod.prescribed_velocity[d],
-                        rod.prescribed_velocity[d + 1],
-                        rod.prescribed_velocity[d + 2],
-                    );
-                    self.inv_mass[off + i] = 0.0;
+                let (v, inv_mass) = if rod.fixed[d] || rod.fixed[d + 1] || rod.fixed[d + 2] {
+                    let p = &rod.prescribed_velocity;
+                    (Vector3::new(p[d], p[d + 1], p[d + 2]), 0.0)
                 } else {
-                    let m = rod.mass[d];
-                    let damp = 1.0 / (1.0 + self.env.damping * dt);
-                    for c in 0..3 {
-                        v[c] = damp * (v[c] + dt * (force[d + c] - grad[d + c]) / m);
-                    }
-                    self.inv_mass[off + i] = damp / m;
-                }
+                    let (x, y, z) = (free(d), free(d + 1), free(d + 2));
+                    (Vector3::new(x.0, y.0, z.0), x.1)
+                };
                 self.v_free[off + i] = v;
+                self.inv_mass[off + i] = inv_mass;
             }
             if self.contact.rolling {
-                let damp = 1.0 / (1.0 + self.env.damping * dt);
                 for e in 0..rod.edges() {
                     let d = theta_dof(e);
                     let k = self.edge_offset[b] + e;
-                    if rod.fixed[d] {
-                        self.spin_free[k] = rod.prescribed_velocity[d];
-                        self.spin_inv_inertia[k] = 0.0;
+                    (self.spin_free[k], self.spin_inv_inertia[k]) = if rod.fixed[d] {
+                        (rod.prescribed_velocity[d], 0.0)
                     } else {
-                        let inertia = rod.mass[d];
-                        self.spin_free[k] = damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / inertia);
-                        self.spin_inv_inertia[k] = damp / inertia;
-                    }
+                        free(d)
+                    };
                 }
             }
             force.copy_from_slice(&self.loads[b]);

@@ -133,20 +133,15 @@ pub fn run_observed(
         frames: Vec::new(),
         stats: Stats::default(),
     };
-    if let Err(errors) = params.validate() {
-        report.status = Status::Invalid;
-        report.reason = errors
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("; ");
-        return report;
-    }
-    let shape = match params.start_shape() {
+    let shape = match params.validated_start() {
         Ok(s) => s,
-        Err(e) => {
+        Err(errors) => {
             report.status = Status::Invalid;
-            report.reason = e.to_string();
+            report.reason = errors
+                .iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("; ");
             return report;
         }
     };

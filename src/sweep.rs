@@ -9,10 +9,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::views::SweepStatus;
 use knotsweep_server::{Core, Limits};
 use knotsweep_worker::store::SweepAction;
-use knotsweep_worker::{PoolConfig, Store, WorkerPool};
+use knotsweep_worker::{PoolConfig, WorkerPool};
 use serde_json::Value;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::Duration;
 
 #[derive(clap::Args)]
@@ -83,9 +82,8 @@ pub fn run(args: Args) -> Result<()> {
     let out = args.out.clone().unwrap_or_else(|| default_out(&args));
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async move {
-        let store = crate::worker::open_store(&args.queue.database_url).await?;
-        let dyn_store: Arc<dyn Store> = store.clone();
-        let core = Core::new(dyn_store.clone(), Limits::default(), None);
+        let store = crate::worker::open(&args.queue.database_url).await?;
+        let core = Core::new(store.clone(), Limits::default(), None);
         // Same specification, same key: a rerun finds the first sweep.
         let key = format!(
             "cli-{}",
@@ -122,7 +120,7 @@ pub fn run(args: Args) -> Result<()> {
         let mut config = PoolConfig::new(args.queue.workers.unwrap_or(0))
             .with_lease(Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)));
         config.poll = Duration::from_millis(100);
-        let pool = WorkerPool::start(dyn_store.clone(), config);
+        let pool = WorkerPool::start(store.clone(), config);
         let bar = ProgressBar::new(total * 100).with_style(
             ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} {msg}").expect("valid template"),
         );

@@ -3,8 +3,7 @@
 //! it stops claiming, releases its leases (the cases are queued again at
 //! once) and exits.
 use anyhow::{Context, Result};
-use knotsweep_worker::store::RetryPolicy;
-use knotsweep_worker::store::sqlite::{SqliteOptions, SqliteStore};
+use knotsweep_worker::store::{StoreOptions, open_store};
 use knotsweep_worker::{PoolConfig, Store, WorkerPool};
 use std::sync::Arc;
 use std::time::Duration;
@@ -40,30 +39,23 @@ pub async fn shutdown_signal() {
     }
 }
 
-/// Opens the store at `url`.
-pub async fn open_store(url: &str) -> Result<Arc<SqliteStore>> {
-    let options = SqliteOptions {
-        retry: RetryPolicy::default(),
-        ..SqliteOptions::default()
-    };
-    Ok(Arc::new(
-        SqliteStore::connect(url, options)
-            .await
-            .with_context(|| format!("opening the database {url}"))?,
-    ))
+/// Opens the store at `url` (any backend [`open_store`] knows).
+pub async fn open(url: &str) -> Result<Arc<dyn Store>> {
+    open_store(url, StoreOptions::default())
+        .await
+        .with_context(|| format!("opening the database {url}"))
 }
 
 pub fn run(args: Args) -> Result<()> {
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async {
-        let store = open_store(&args.queue.database_url).await?;
+        let store = open(&args.queue.database_url).await?;
         let mut config = PoolConfig::new(args.queue.workers.unwrap_or(0))
             .with_lease(Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)));
         config.poll = Duration::from_millis(args.poll_ms.max(1));
         let name = config.name.clone();
         let workers = config.workers;
-        let dyn_store: Arc<dyn Store> = store.clone();
-        let pool = WorkerPool::start(dyn_store, config);
+        let pool = WorkerPool::start(store.clone(), config);
         println!(
             "knotsweep worker {name}: {workers} workers on {}",
             args.queue.database_url

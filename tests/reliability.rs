@@ -218,16 +218,26 @@ fn sweep_without_a_specification_names_the_flags() {
 #[test]
 fn unsupported_database_urls_say_so() {
     let out = Command::new(BIN)
-        .args(["worker", "--database-url", "postgres://127.0.0.1/none"])
+        .args(["worker", "--database-url", "mysql://127.0.0.1/none"])
         .output()
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("postgres:// databases are not supported by this build"),
-        "{err}"
-    );
+    assert!(err.contains("mysql:// databases are not supported"), "{err}");
     assert_eq!(err.matches("not supported").count(), 1, "{err}");
+}
+
+/// A PostgreSQL URL whose server does not answer says which server.
+#[test]
+fn unreachable_postgres_says_which_server() {
+    // Port 1 on loopback: nothing listens there.
+    let out = Command::new(BIN)
+        .args(["worker", "--database-url", "postgres://postgres@127.0.0.1:1/none"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("cannot reach PostgreSQL at 127.0.0.1:1"), "{err}");
 }
 
 /// Reasons users read carry values as users write them, not Rust's Debug

@@ -252,7 +252,7 @@ async fn computed_cases_are_reused_across_sweeps() {
     let (_dir, db) = temp_db();
     let server = start(config(&db, 1)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let endpoint = format!("{url}/api/sweeps");
 
     let (status, a) = post(
@@ -333,7 +333,7 @@ async fn cancel_stops_running_cases_at_their_next_heartbeat() {
     let (_dir, db) = temp_db();
     let server = start(config(&db, 1)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let id = submit_sweep(
         &c,
         &url,
@@ -406,7 +406,7 @@ async fn cancelling_spares_cases_another_sweep_wants_and_resubmitting_requeues()
         &json!({"base": tiny_base(), "grid": {"mu": [0.55]}}),
     )
     .await;
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let ghost = store
         .claim("ghost", Duration::from_millis(200))
         .await
@@ -441,7 +441,7 @@ async fn a_dead_workers_case_is_finished_once_by_another_after_its_lease_expires
     let (_dir, db) = temp_db();
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let id = submit_sweep(&c, &url, &json!({"base": tiny_base(), "grid": {"mu": [0.6]}})).await;
 
     // A worker claims the case and dies: no heartbeat, no release.
@@ -530,7 +530,7 @@ async fn a_server_restart_loses_no_accepted_sweep_or_finished_result() {
 
     let server = start(config(&db, 1)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let (_, list) = get(&c, &format!("{url}/api/sweeps")).await;
     assert_eq!(list[0]["id"], id);
     assert_eq!(list[0]["name"], "restart");
@@ -582,7 +582,7 @@ async fn concurrent_worker_processes_never_run_a_case_twice() {
     let (dir, db) = temp_db();
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let mus: Vec<Value> = (0..CASES)
         .map(|i| serde_json::from_str(&format!("{:.2}", i as f64 / 100.0)).unwrap())
         .collect();
@@ -687,7 +687,7 @@ async fn a_worker_process_releases_its_lease_on_sigterm() {
     let (dir, db) = temp_db();
     let server = start(config(&db, 0)).await;
     let (url, c) = (server.url(), client());
-    let store = server.store();
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
     let id = submit_sweep(&c, &url, &json!({"base": long_base(), "grid": {"mu": [0.3]}})).await;
     let log = std::fs::File::create(dir.path().join("worker.log")).unwrap();
     let mut workers = Children(vec![
@@ -1130,7 +1130,7 @@ async fn queue_figures() {
     .await;
     let elapsed = t.elapsed().as_secs_f64();
     pool.shutdown().await;
-    let store2 = server.store();
+    let store2 = SqliteStore::connect(&db2, SqliteOptions::default()).await.unwrap();
     let solver_ms = sqlx_count(
         &store2,
         "SELECT CAST(SUM(wall_time) * 1000 AS INTEGER) FROM results",

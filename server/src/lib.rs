@@ -21,7 +21,7 @@ pub mod views;
 
 use anyhow::Context;
 use knotsweep_worker::store::RetryPolicy;
-use knotsweep_worker::store::sqlite::{SqliteOptions, SqliteStore};
+use knotsweep_worker::store::{StoreOptions, open_store};
 use knotsweep_worker::{PoolConfig, Store, WorkerPool};
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -76,7 +76,7 @@ impl Default for ServerConfig {
 /// A server that is accepting connections.
 pub struct RunningServer {
     pub addr: SocketAddr,
-    store: Arc<SqliteStore>,
+    store: Arc<dyn Store>,
     shutdown: watch::Sender<bool>,
     http: JoinHandle<()>,
     reaper: JoinHandle<()>,
@@ -87,18 +87,16 @@ pub struct RunningServer {
 /// serves the API on `listener`.
 pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> anyhow::Result<RunningServer> {
     let addr = listener.local_addr()?;
-    let store = Arc::new(
-        SqliteStore::connect(
-            &config.database_url,
-            SqliteOptions {
-                retry: config.retry,
-                ..SqliteOptions::default()
-            },
-        )
-        .await
-        .with_context(|| format!("opening the database {}", config.database_url))?,
-    );
-    let dyn_store: Arc<dyn Store> = store.clone();
+    let store = open_store(
+        &config.database_url,
+        StoreOptions {
+            retry: config.retry,
+            ..StoreOptions::default()
+        },
+    )
+    .await
+    .with_context(|| format!("opening the database {}", config.database_url))?;
+    let dyn_store = store.clone();
     let workers = config
         .workers
         .unwrap_or_else(knotsweep_worker::pool::default_workers);
@@ -157,7 +155,7 @@ impl RunningServer {
     }
 
     /// The server's store.
-    pub fn store(&self) -> Arc<SqliteStore> {
+    pub fn store(&self) -> Arc<dyn Store> {
         self.store.clone()
     }
 

@@ -18,7 +18,13 @@
 //! - H: along the loop's symmetric division (the plane bisecting the chord PQ),
 //!   the distance from the chord to the farthest point where the loop crosses
 //!   that plane; H bar = H / W.
-use nalgebra::Vector3;
+//! - The braid's shape in the terms of the simplified model (Sec. 5, eq. 12):
+//!   its axis is the principal direction of the nodes of both strands' runs,
+//!   l_b their extent along it (the braid's axial length), l_l the arc length of
+//!   the loop from P to Q, epsilon = l_b / l_l, and phi the angle between the
+//!   axis and the loop's end tangents (edges P P+1 and Q-1 Q; mean of the two,
+//!   in [0, pi/2]). The paper fixes epsilon = 0.7 and phi = pi/3 "at inversion".
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// One sample of the tightening series.
@@ -43,6 +49,10 @@ pub struct Sample {
     pub active_contacts: usize,
     /// Largest penetration over h (dimensionless; the CSV column of the same name).
     pub max_penetration_over_h: f64,
+    /// Braid shape at the sample (module documentation; 0 when no braid is found):
+    /// epsilon = l_b / l_l and the loop's end tilt phi (rad).
+    pub epsilon: f64,
+    pub phi: f64,
     /// Newton iterations of the step that produced the sample.
     pub newton_iterations: u32,
     /// Time step (s) of the step that produced the sample.
@@ -50,14 +60,14 @@ pub struct Sample {
 }
 
 /// Header of the series CSV, one column per `Sample` field.
-pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,newton_iterations,dt";
+pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,epsilon,phi,newton_iterations,dt";
 
 /// The series as CSV text (header, then one row per sample).
 pub fn series_csv(series: &[Sample]) -> String {
     let mut out = format!("{CSV_HEADER}\n");
     for s in series {
         out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             s.time,
             s.l_k_bar,
             s.l_c_over_l,
@@ -70,6 +80,8 @@ pub fn series_csv(series: &[Sample]) -> String {
             s.contacts,
             s.active_contacts,
             s.max_penetration_over_h,
+            s.epsilon,
+            s.phi,
             s.newton_iterations,
             s.dt
         ));
@@ -90,9 +102,25 @@ pub struct LoopGeometry {
 /// Largest gap (in segments) inside one run of braid contacts.
 pub const RUN_GAP: usize = 3;
 
-/// Loop ends (P, Q) from the self-contact segment pairs (i, j), as defined in
-/// the module documentation; `None` when no pair crosses the middle node `mid`.
-pub fn braid_ends(pairs: impl IntoIterator<Item = (usize, usize)>, mid: usize) -> Option<(usize, usize)> {
+/// The braid's two strands: the runs of segments (first, last) of the rod
+/// before and after the loop's middle node that touch each other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Braid {
+    pub first: (usize, usize),
+    pub second: (usize, usize),
+}
+
+impl Braid {
+    /// Loop ends (P, Q): the node after the first run and the second run's first node.
+    pub fn loop_ends(&self) -> (usize, usize) {
+        (self.first.1 + 1, self.second.0)
+    }
+}
+
+/// The braid from the self-contact segment pairs (i, j), as defined in the
+/// module documentation; `None` when no pair crosses the middle node `mid` or
+/// the runs leave no loop between them.
+pub fn braid(pairs: impl IntoIterator<Item = (usize, usize)>, mid: usize) -> Option<Braid> {
     let mut first = Vec::new();
     let mut second = Vec::new();
     for (i, j) in pairs {
@@ -102,9 +130,45 @@ pub fn braid_ends(pairs: impl IntoIterator<Item = (usize, usize)>, mid: usize) -
             second.push(j);
         }
     }
-    let (_, a_end) = longest_run(&mut first)?;
-    let (b_start, _) = longest_run(&mut second)?;
-    (a_end + 1 < b_start).then_some((a_end + 1, b_start))
+    let first = longest_run(&mut first)?;
+    let second = longest_run(&mut second)?;
+    (first.1 + 1 < second.0).then_some(Braid { first, second })
+}
+
+/// The braid's shape in the simplified model's terms (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BraidShape {
+    /// Axial length of the braid and arc length of the loop (m).
+    pub l_b: f64,
+    pub l_l: f64,
+    pub epsilon: f64,
+    /// Tilt of the loop's end tangents from the braid axis (rad).
+    pub phi: f64,
+}
+
+/// Shape of `braid` on the rod `points`.
+pub fn braid_shape(points: &[Vector3<f64>], braid: &Braid) -> BraidShape {
+    let strands = [braid.first, braid.second];
+    let nodes = || strands.iter().flat_map(|&(a, b)| points[a..=b + 1].iter());
+    let count = strands.iter().map(|(a, b)| b + 2 - a).sum::<usize>() as f64;
+    let centre = nodes().sum::<Vector3<f64>>() / count;
+    let covariance = nodes().fold(Matrix3::zeros(), |m, x| m + (x - centre) * (x - centre).transpose());
+    let eigen = covariance.symmetric_eigen();
+    let axis = eigen.eigenvectors.column(eigen.eigenvalues.imax()).into_owned();
+    let (lo, hi) = nodes().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+        let s = (x - centre).dot(&axis);
+        (lo.min(s), hi.max(s))
+    });
+    let (p, q) = braid.loop_ends();
+    let l_l: f64 = (p..q).map(|k| (points[k + 1] - points[k]).norm()).sum();
+    let tilt = |a: usize, b: usize| (points[b] - points[a]).normalize().dot(&axis).abs().min(1.0).acos();
+    let l_b = hi - lo;
+    BraidShape {
+        l_b,
+        l_l,
+        epsilon: l_b / l_l,
+        phi: 0.5 * (tilt(p, p + 1) + tilt(q - 1, q)),
+    }
 }
 
 /// The longest run of values with gaps of at most `RUN_GAP` (first and last value).
@@ -321,12 +385,36 @@ mod tests {
     }
 
     #[test]
-    fn braid_ends_from_contacts() {
+    fn braid_from_contacts() {
         // Strand A (segments 40..60) contacts strand B (141..161), mid = 100;
         // an isolated loop-on-braid contact (80, 150) must not move the ends.
         let pairs = (40..60).map(|i| (i, 200 - i)).chain([(10, 20), (80, 150)]);
-        assert_eq!(braid_ends(pairs, 100), Some((60, 141)));
-        assert_eq!(braid_ends([(10, 20)], 100), None);
+        let b = braid(pairs, 100).unwrap();
+        assert_eq!((b.first, b.second), ((40, 59), (141, 160)));
+        assert_eq!(b.loop_ends(), (60, 141));
+        assert_eq!(braid([(10, 20)], 100), None);
+    }
+
+    /// Two straight strands of length 10 along z, 2 apart, closed by a loop of
+    /// two straight legs rising c above them: l_b = 10, l_l = 2 sqrt(1 + c^2),
+    /// phi = atan(1 / c).
+    #[test]
+    fn braid_shape_of_straight_strands_and_a_tent_loop() {
+        let c = 1.7;
+        let mut pts: Vec<Vector3<f64>> = (0..=10).map(|k| Vector3::new(-1.0, 0.0, k as f64)).collect();
+        pts.push(Vector3::new(0.0, 0.0, 10.0 + c));
+        pts.extend((0..=10).map(|k| Vector3::new(1.0, 0.0, 10.0 - k as f64)));
+        let b = Braid {
+            first: (0, 9),
+            second: (12, 21),
+        };
+        assert_eq!(b.loop_ends(), (10, 12));
+        let s = braid_shape(&pts, &b);
+        let l_l = 2.0 * (1.0 + c * c).sqrt();
+        assert!((s.l_b - 10.0).abs() < 1e-12, "{}", s.l_b);
+        assert!((s.l_l - l_l).abs() < 1e-12);
+        assert!((s.epsilon - 10.0 / l_l).abs() < 1e-12);
+        assert!((s.phi - (1.0 / c).atan()).abs() < 1e-12, "{}", s.phi);
     }
 
     fn sample(l: f64, h_bar: f64, ke: f64, f: f64) -> Sample {

@@ -284,10 +284,14 @@ pub fn run_observed(
         let force = 0.5 * (f_start + f_finish);
         let points = rod.positions();
         let pairs = world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
-        let geometry =
-            measurements::braid_ends(pairs, mid).map(|(p, q)| measurements::loop_geometry(&points, p, q));
-        let (width, height) = geometry.map_or((0.0, 0.0), |g| (g.width, g.height));
-        if let Some(g) = geometry {
+        let braid = measurements::braid(pairs, mid);
+        let geometry = braid.map(|b| {
+            let (p, q) = b.loop_ends();
+            (measurements::loop_geometry(&points, p, q), measurements::braid_shape(&points, &b))
+        });
+        let (width, height) = geometry.map_or((0.0, 0.0), |(g, _)| (g.width, g.height));
+        let (epsilon, phi) = geometry.map_or((0.0, 0.0), |(_, b)| (b.epsilon, b.phi));
+        if let Some((g, _)) = geometry {
             mid = (g.start + g.end) / 2;
         }
         report.series.push(Sample {
@@ -303,6 +307,8 @@ pub fn run_observed(
             contacts: step.contacts,
             active_contacts: step.active_contacts,
             max_penetration_over_h: step.max_penetration / params.h,
+            epsilon,
+            phi,
             newton_iterations: step.newton_iterations,
             dt,
         });

@@ -227,7 +227,7 @@ async fn slot_loop(ctx: Arc<Ctx>, slot: usize, mut shutdown: watch::Receiver<boo
             Ok(None) => {
                 error_backoff = Duration::from_millis(100);
                 tokio::select! {
-                    _ = tokio::time::sleep(jittered(ctx.config.poll)) => {}
+                    _ = ctx.store.wait_for_work(jittered(ctx.config.poll)) => {}
                     _ = shutdown.changed() => {}
                 }
             }

@@ -171,7 +171,8 @@ pub fn derivative_check(
     Ok(rows)
 }
 
-fn sweep_row(params: Params) -> Result<(SweepRow, Bifurcation), SimplifiedError> {
+/// The folds of the simplified model for `params` (one row of Figs. 14 and 15).
+pub fn sweep_row(params: Params) -> Result<(SweepRow, Bifurcation), SimplifiedError> {
     let b = bifurcation(&BifurcationSpec::for_params(params))?;
     let row = SweepRow {
         n: params.n,

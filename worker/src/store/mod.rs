@@ -1,9 +1,10 @@
 //! The queue is the `cases` table; this trait is everything the server and the
-//! workers do with it. [`sqlite::SqliteStore`] implements it on SQLite; a
-//! PostgreSQL implementation (a later issue) implements the same trait with the
-//! same migrations (the SQL is portable: integer ids, times in Unix
-//! milliseconds, JSON as text) and `FOR UPDATE SKIP LOCKED` in the claim's
-//! sub-select.
+//! workers do with it. [`sqlite::SqliteStore`] implements it on one SQLite file
+//! (the embedded default), [`postgres::PgStore`] on a PostgreSQL server that
+//! workers on many hosts share (`FOR UPDATE SKIP LOCKED` claims, wake-ups by
+//! `LISTEN/NOTIFY`). Both run the same schema (`migrations/sqlite`,
+//! `migrations/postgres`) and decode rows with the same code (`rows`);
+//! [`open_store`] picks one from a URL.
 //!
 //! Queue invariants, whatever the backend:
 //! - a case is claimed by one statement that sets the lease (owner, expiry)
@@ -15,6 +16,8 @@
 //! - an expired lease returns the case to the queue (with backoff) or, after
 //!   `max_attempts` claims, marks it `failed` with the reason;
 //! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
+pub mod postgres;
+mod rows;
 pub mod sqlite;
 
 use async_trait::async_trait;
@@ -40,6 +43,9 @@ pub enum StoreError {
     /// A database URL this build cannot open.
     #[error("{0}")]
     Unsupported(String),
+    /// The database server did not answer.
+    #[error("{0}")]
+    Unreachable(String),
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;
@@ -389,6 +395,60 @@ pub trait Store: Send + Sync + 'static {
     async fn status_counts(&self) -> StoreResult<StatusCounts>;
     /// Queued cases of active sweeps whose backoff has passed.
     async fn queue_depth(&self) -> StoreResult<i64>;
+
+    // --- connection ---
+
+    /// Waits until work may be available: `poll` on a backend without
+    /// notifications; until a notification (or a fallback interval) on one with.
+    async fn wait_for_work(&self, poll: Duration) {
+        tokio::time::sleep(poll).await;
+    }
+    /// Closes every connection.
+    async fn close(&self);
+}
+
+/// Connection settings common to the backends.
+#[derive(Clone, Debug)]
+pub struct StoreOptions {
+    /// Connections in the pool.
+    pub max_connections: u32,
+    pub retry: RetryPolicy,
+}
+
+impl Default for StoreOptions {
+    fn default() -> Self {
+        Self {
+            max_connections: 8,
+            retry: RetryPolicy::default(),
+        }
+    }
+}
+
+/// Opens the store at `url` and runs its migrations: `sqlite://PATH` (or a
+/// plain path; created if missing) or `postgres://...` / `postgresql://...`.
+/// Any other scheme is `Unsupported`, naming it; an unreachable server is a
+/// `Database` error naming the URL's host.
+pub async fn open_store(url: &str, options: StoreOptions) -> StoreResult<std::sync::Arc<dyn Store>> {
+    let scheme = url.split_once("://").map(|(s, _)| s);
+    Ok(match scheme {
+        Some("postgres" | "postgresql") => std::sync::Arc::new(postgres::PgStore::connect(url, options).await?),
+        Some("sqlite") | None => std::sync::Arc::new(
+            sqlite::SqliteStore::connect(
+                url,
+                sqlite::SqliteOptions {
+                    max_connections: options.max_connections,
+                    retry: options.retry,
+                    ..Default::default()
+                },
+            )
+            .await?,
+        ),
+        Some(other) => {
+            return Err(StoreError::Unsupported(format!(
+                "{other}:// databases are not supported: give sqlite://PATH (the embedded default) or postgres://USER@HOST/DB"
+            )));
+        }
+    })
 }
 
 /// Milliseconds since the Unix epoch.

@@ -7,6 +7,7 @@
 //! failing with "database is locked" when upgrading a stale read snapshot;
 //! single write statements (claim, heartbeat) take the write lock when they
 //! start. Nothing stays open while a case computes.
+use super::rows::*;
 use super::*;
 use sqlx::Row;
 use sqlx::sqlite::{
@@ -41,17 +42,6 @@ pub struct SqliteStore {
     retry: RetryPolicy,
 }
 
-const CASE_COLUMNS: &str = "c.id, c.case_key, c.solver_version, c.params, c.status, c.attempts, \
-    c.max_attempts, c.not_before, c.lease_owner, c.lease_expires_at, c.fence, c.progress, \
-    c.progress_detail, c.cancel_requested, c.last_error, c.created_at, c.started_at, c.finished_at, \
-    r.outcome, r.reason, r.inversion, r.summary, r.wall_time, r.worker, r.created_at AS result_created_at";
-
-const SWEEP_COLUMNS: &str = "id, name, preset, spec, varied, state, created_at, updated_at";
-
-/// Some sweep that is not cancelled (active or paused) still wants case `c`.
-const WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JOIN sweeps ws ON ws.id = w.sweep_id \
-    WHERE w.case_id = c.id AND ws.state != 'cancelled')";
-
 impl SqliteStore {
     /// Opens (creating if missing) the database at `url` (`sqlite://path`,
     /// `sqlite:path` or a plain path) and runs the migrations.
@@ -60,7 +50,7 @@ impl SqliteStore {
             url.to_string()
         } else if let Some((scheme, _)) = url.split_once("://") {
             return Err(StoreError::Unsupported(format!(
-                "{scheme}:// databases are not supported by this build: give a sqlite:// URL (or a file path)"
+                "{scheme}:// is not a SQLite database: give sqlite://PATH (or a file path)"
             )));
         } else {
             format!("sqlite://{url}")
@@ -81,7 +71,7 @@ impl SqliteStore {
         // run finds the schema in place on its next try.
         let mut tries = 0;
         loop {
-            match sqlx::migrate!("../migrations").run(&pool).await {
+            match sqlx::migrate!("../migrations/sqlite").run(&pool).await {
                 Ok(()) => break,
                 Err(e) if tries < 10 => {
                     tries += 1;
@@ -102,11 +92,6 @@ impl SqliteStore {
         &self.pool
     }
 
-    /// Closes every connection (checkpointing the WAL).
-    pub async fn close(&self) {
-        self.pool.close().await;
-    }
-
     async fn sweep_by_id<'e, E>(exec: E, id: i64) -> StoreResult<Option<SweepRecord>>
     where
         E: sqlx::Executor<'e, Database = sqlx::Sqlite>,
@@ -119,63 +104,22 @@ impl SqliteStore {
     }
 }
 
-fn json<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> StoreResult<T> {
-    serde_json::from_str(text).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
-}
-
-fn sweep_from_row(r: &SqliteRow) -> StoreResult<SweepRecord> {
-    Ok(SweepRecord {
-        id: r.try_get("id")?,
-        name: r.try_get("name")?,
-        preset: r.try_get("preset")?,
-        spec: json(&r.try_get::<String, _>("spec")?, "sweep spec")?,
-        varied: json(&r.try_get::<String, _>("varied")?, "sweep varied")?,
-        state: SweepState::parse(&r.try_get::<String, _>("state")?)?,
-        created_at: r.try_get("created_at")?,
-        updated_at: r.try_get("updated_at")?,
-    })
-}
-
-fn case_from_row(r: &SqliteRow) -> StoreResult<CaseRecord> {
-    let result = match r.try_get::<Option<String>, _>("outcome")? {
-        None => None,
-        Some(outcome) => Some(ResultSummary {
-            outcome,
-            reason: r.try_get("reason")?,
-            inversion: r
-                .try_get::<Option<String>, _>("inversion")?
-                .map(|t| json(&t, "inversion"))
-                .transpose()?,
-            summary: json(&r.try_get::<String, _>("summary")?, "result summary")?,
-            wall_time: r.try_get("wall_time")?,
-            worker: r.try_get("worker")?,
-            created_at: r.try_get("result_created_at")?,
-        }),
-    };
-    Ok(CaseRecord {
-        id: r.try_get("id")?,
-        key: r.try_get("case_key")?,
-        solver_version: r.try_get("solver_version")?,
-        params: json(&r.try_get::<String, _>("params")?, "case params")?,
-        state: CaseState::parse(&r.try_get::<String, _>("status")?)?,
-        attempts: r.try_get::<i64, _>("attempts")? as u32,
-        max_attempts: r.try_get::<i64, _>("max_attempts")? as u32,
-        not_before: r.try_get("not_before")?,
-        lease_owner: r.try_get("lease_owner")?,
-        lease_expires_at: r.try_get("lease_expires_at")?,
-        fence: r.try_get("fence")?,
-        progress: r.try_get("progress")?,
-        progress_detail: r
-            .try_get::<Option<String>, _>("progress_detail")?
-            .map(|t| json(&t, "progress"))
-            .transpose()?,
-        cancel_requested: r.try_get::<i64, _>("cancel_requested")? != 0,
-        last_error: r.try_get("last_error")?,
-        created_at: r.try_get("created_at")?,
-        started_at: r.try_get("started_at")?,
-        finished_at: r.try_get("finished_at")?,
-        result,
-    })
+impl Columns for SqliteRow {
+    fn text(&self, column: &str) -> StoreResult<String> {
+        Ok(self.try_get(column)?)
+    }
+    fn text_or_null(&self, column: &str) -> StoreResult<Option<String>> {
+        Ok(self.try_get(column)?)
+    }
+    fn int(&self, column: &str) -> StoreResult<i64> {
+        Ok(self.try_get(column)?)
+    }
+    fn int_or_null(&self, column: &str) -> StoreResult<Option<i64>> {
+        Ok(self.try_get(column)?)
+    }
+    fn real(&self, column: &str) -> StoreResult<f64> {
+        Ok(self.try_get(column)?)
+    }
 }
 
 async fn log<'e, E>(exec: E, case_id: i64, level: &str, message: &str) -> StoreResult<()>
@@ -601,25 +545,8 @@ impl Store for SqliteStore {
     }
 
     async fn complete(&self, lease: &Lease, report: &CaseReport) -> StoreResult<bool> {
-        use solver::protocol::Status;
-        if report.status == Status::Cancelled {
-            return Err(StoreError::Conflict(
-                "a cancelled run is not a result".to_string(),
-            ));
-        }
+        let stored = StoredResult::new(report, &lease.owner)?;
         let now = now_ms();
-        let outcome = serde_json::to_value(report.status).expect("status serialises");
-        let outcome = outcome.as_str().unwrap_or("unknown").to_string();
-        let summary = serde_json::json!({
-            "determinant_initial": report.determinant_initial,
-            "determinant_final": report.determinant_final,
-            "stats": report.stats,
-        });
-        let series = serde_json::to_string(&report.series).expect("series serialises");
-        let frames = serde_json::to_string(&report.frames).expect("frames serialise");
-        let inversion = report
-            .inversion
-            .map(|i| serde_json::to_string(&i).expect("inversion serialises"));
         let mut tx = self.pool.begin_with("BEGIN IMMEDIATE").await?;
         let updated = sqlx::query(
             "UPDATE cases SET status = 'done', finished_at = ?, progress = 1, lease_owner = NULL, \
@@ -642,33 +569,19 @@ impl Store for SqliteStore {
              fence, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
         )
         .bind(lease.case_id)
-        .bind(&outcome)
+        .bind(&stored.outcome)
         .bind(&report.reason)
-        .bind(inversion)
-        .bind(summary.to_string())
-        .bind(series)
-        .bind(frames)
+        .bind(&stored.inversion)
+        .bind(&stored.summary)
+        .bind(&stored.series)
+        .bind(&stored.frames)
         .bind(report.stats.wall_time)
         .bind(&lease.owner)
         .bind(lease.fence)
         .bind(now)
         .execute(&mut *tx)
         .await?;
-        let message = match (&report.inversion, report.reason.is_empty()) {
-            (Some(inv), _) => format!(
-                "result {outcome} by {} in {:.2} s: inversion at l_k bar {:.2}",
-                lease.owner, report.stats.wall_time, inv.l_k_bar
-            ),
-            (None, true) => format!(
-                "result {outcome} by {} in {:.2} s: no inversion",
-                lease.owner, report.stats.wall_time
-            ),
-            (None, false) => format!(
-                "result {outcome} by {} in {:.2} s: {}",
-                lease.owner, report.stats.wall_time, report.reason
-            ),
-        };
-        log(&mut *tx, lease.case_id, "info", &message).await?;
+        log(&mut *tx, lease.case_id, "info", &stored.message).await?;
         tx.commit().await?;
         Ok(true)
     }
@@ -811,5 +724,10 @@ impl Store for SqliteStore {
         )
         .fetch_one(&self.pool)
         .await?)
+    }
+
+    /// Closes every connection (checkpointing the WAL).
+    async fn close(&self) {
+        self.pool.close().await;
     }
 }

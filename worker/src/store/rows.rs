@@ -1,0 +1,132 @@
+//! Decoding stored rows into records, once for every backend: each backend's
+//! row type reads the five column types the schema uses.
+use super::*;
+
+/// Typed column access of a backend's row.
+pub(crate) trait Columns {
+    fn text(&self, column: &str) -> StoreResult<String>;
+    fn text_or_null(&self, column: &str) -> StoreResult<Option<String>>;
+    fn int(&self, column: &str) -> StoreResult<i64>;
+    fn int_or_null(&self, column: &str) -> StoreResult<Option<i64>>;
+    fn real(&self, column: &str) -> StoreResult<f64>;
+}
+
+/// Columns of a case with its result summary (`cases c LEFT JOIN results r`).
+pub(crate) const CASE_COLUMNS: &str = "c.id, c.case_key, c.solver_version, c.params, c.status, c.attempts, \
+    c.max_attempts, c.not_before, c.lease_owner, c.lease_expires_at, c.fence, c.progress, \
+    c.progress_detail, c.cancel_requested, c.last_error, c.created_at, c.started_at, c.finished_at, \
+    r.outcome, r.reason, r.inversion, r.summary, r.wall_time, r.worker, r.created_at AS result_created_at";
+
+pub(crate) const SWEEP_COLUMNS: &str = "id, name, preset, spec, varied, state, created_at, updated_at";
+
+/// Some sweep that is not cancelled (active or paused) still wants case `c`.
+pub(crate) const WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JOIN sweeps ws ON ws.id = w.sweep_id \
+    WHERE w.case_id = c.id AND ws.state != 'cancelled')";
+
+pub(crate) fn json<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> StoreResult<T> {
+    serde_json::from_str(text).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
+}
+
+pub(crate) fn sweep_from_row(r: &impl Columns) -> StoreResult<SweepRecord> {
+    Ok(SweepRecord {
+        id: r.int("id")?,
+        name: r.text_or_null("name")?,
+        preset: r.text_or_null("preset")?,
+        spec: json(&r.text("spec")?, "sweep spec")?,
+        varied: json(&r.text("varied")?, "sweep varied")?,
+        state: SweepState::parse(&r.text("state")?)?,
+        created_at: r.int("created_at")?,
+        updated_at: r.int("updated_at")?,
+    })
+}
+
+pub(crate) fn case_from_row(r: &impl Columns) -> StoreResult<CaseRecord> {
+    let result = match r.text_or_null("outcome")? {
+        None => None,
+        Some(outcome) => Some(ResultSummary {
+            outcome,
+            reason: r.text("reason")?,
+            inversion: r
+                .text_or_null("inversion")?
+                .map(|t| json(&t, "inversion"))
+                .transpose()?,
+            summary: json(&r.text("summary")?, "result summary")?,
+            wall_time: r.real("wall_time")?,
+            worker: r.text("worker")?,
+            created_at: r.int("result_created_at")?,
+        }),
+    };
+    Ok(CaseRecord {
+        id: r.int("id")?,
+        key: r.text("case_key")?,
+        solver_version: r.text("solver_version")?,
+        params: json(&r.text("params")?, "case params")?,
+        state: CaseState::parse(&r.text("status")?)?,
+        attempts: r.int("attempts")? as u32,
+        max_attempts: r.int("max_attempts")? as u32,
+        not_before: r.int("not_before")?,
+        lease_owner: r.text_or_null("lease_owner")?,
+        lease_expires_at: r.int_or_null("lease_expires_at")?,
+        fence: r.int("fence")?,
+        progress: r.real("progress")?,
+        progress_detail: r
+            .text_or_null("progress_detail")?
+            .map(|t| json(&t, "progress"))
+            .transpose()?,
+        cancel_requested: r.int("cancel_requested")? != 0,
+        last_error: r.text_or_null("last_error")?,
+        created_at: r.int("created_at")?,
+        started_at: r.int_or_null("started_at")?,
+        finished_at: r.int_or_null("finished_at")?,
+        result,
+    })
+}
+
+/// What a completed report stores: outcome word, summary, series, frames and
+/// inversion (JSON text), and the log line.
+pub(crate) struct StoredResult {
+    pub outcome: String,
+    pub summary: String,
+    pub series: String,
+    pub frames: String,
+    pub inversion: Option<String>,
+    pub message: String,
+}
+
+impl StoredResult {
+    /// `Conflict` for a cancelled run, which is not a result.
+    pub(crate) fn new(report: &CaseReport, worker: &str) -> StoreResult<Self> {
+        use solver::protocol::Status;
+        if report.status == Status::Cancelled {
+            return Err(StoreError::Conflict(
+                "a cancelled run is not a result".to_string(),
+            ));
+        }
+        let outcome = serde_json::to_value(report.status).expect("status serialises");
+        let outcome = outcome.as_str().unwrap_or("unknown").to_string();
+        let summary = serde_json::json!({
+            "determinant_initial": report.determinant_initial,
+            "determinant_final": report.determinant_final,
+            "stats": report.stats,
+        });
+        let wall = report.stats.wall_time;
+        let message = match (&report.inversion, report.reason.is_empty()) {
+            (Some(inv), _) => format!(
+                "result {outcome} by {worker} in {wall:.2} s: inversion at l_k bar {:.2}",
+                inv.l_k_bar
+            ),
+            (None, true) => format!("result {outcome} by {worker} in {wall:.2} s: no inversion"),
+            (None, false) => format!("result {outcome} by {worker} in {wall:.2} s: {}", report.reason),
+        };
+        Ok(Self {
+            outcome,
+            summary: summary.to_string(),
+            series: serde_json::to_string(&report.series).expect("series serialises"),
+            frames: serde_json::to_string(&report.frames).expect("frames serialise"),
+            inversion: report
+                .inversion
+                .map(|i| serde_json::to_string(&i).expect("inversion serialises")),
+            message,
+        })
+    }
+}

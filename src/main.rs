@@ -1,5 +1,6 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
+mod bench_queue;
 mod plot;
 mod queue_args;
 mod reproduce;
@@ -44,6 +45,8 @@ enum Command {
     Worker(worker::Args),
     /// Run a sweep locally (resumable) and write its phase diagram.
     Sweep(sweep::Args),
+    /// Measure the queue's throughput (claims and completions of no-op cases).
+    BenchQueue(bench_queue::Args),
 }
 
 fn main() {
@@ -62,6 +65,7 @@ fn main() {
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::BenchQueue(args) => bench_queue::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

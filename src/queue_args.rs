@@ -4,13 +4,15 @@ use knotsweep_server::DEFAULT_DATABASE_URL;
 /// Where the queue lives and how this process works on it.
 #[derive(clap::Args)]
 pub struct QueueArgs {
-    /// Database: `sqlite://PATH`, created if missing; `serve`, `worker` and
-    /// `sweep` on the same file share the queue and reuse each other's results.
-    #[arg(long, default_value = DEFAULT_DATABASE_URL)]
+    /// Database: `sqlite://PATH` (created if missing; processes on this
+    /// machine) or `postgres://USER@HOST:PORT/DB` (workers on any host).
+    /// `serve`, `worker` and `sweep` on one database share the queue and
+    /// reuse each other's results.
+    #[arg(long, env = "DATABASE_URL", default_value = DEFAULT_DATABASE_URL)]
     pub database_url: String,
     /// Cases run at once by this process, 0 to 256 [default: one per core].
     /// Cases are CPU-bound: more workers than cores only share the cores.
-    #[arg(long, value_parser = parse_workers)]
+    #[arg(long, visible_alias = "threads", value_parser = parse_workers)]
     pub workers: Option<usize>,
     /// Lease length (s); workers heartbeat every third of it.
     #[arg(long, default_value_t = 30.0)]

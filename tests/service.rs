@@ -58,7 +58,8 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     assert_eq!(sweep["replayed"], false);
     assert_eq!(sweep["total"], 4);
     assert_eq!(sweep["varied"], json!(["mu", "nodes"]));
-    assert_eq!(sweep["cases"][1]["params"], json!({"mu": 0.1, "nodes": 131}));
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
+    assert_eq!(cases[1]["params"], json!({"mu": 0.1, "nodes": 131}));
 
     // Follow the server-sent events to the end.
     let mut events = c
@@ -243,6 +244,8 @@ async fn idempotent_resubmission_returns_the_first_sweep() {
     .await;
     assert_eq!(status, StatusCode::CREATED);
     assert_ne!(other["id"], first["id"]);
+    let (_, other) = get_sweep(&c, &url, other["id"].as_i64().unwrap()).await;
+    let (_, first) = get_sweep(&c, &url, first["id"].as_i64().unwrap()).await;
     assert_eq!(case_ids(&other), case_ids(&first));
     server.shutdown().await.unwrap();
 }
@@ -272,6 +275,7 @@ async fn computed_cases_are_reused_across_sweeps() {
     let (status, b) = post(&c, &endpoint, &json!({"base": base, "grid": {"mu": [2e-1, 0.4]}})).await;
     assert_eq!(status, StatusCode::CREATED);
     assert_eq!(b["cached"], 1, "{b:#}");
+    let (_, b) = get_sweep(&c, &url, b["id"].as_i64().unwrap()).await;
     assert_eq!(b["cases"][0]["case_id"], case_a);
     assert_eq!(b["cases"][0]["cached"], true);
     assert_eq!(b["cases"][0]["status"], "completed", "reused at once");
@@ -307,7 +311,7 @@ async fn pause_holds_queued_cases_and_resume_releases_them() {
     // Workers come up: nothing of the paused sweep is handed out.
     let pool = WorkerPool::start(server.store(), pool_config(2));
     tokio::time::sleep(Duration::from_millis(800)).await;
-    let (_, held) = get(&c, &format!("{url}/api/sweeps/{id}")).await;
+    let (_, held) = get_sweep(&c, &url, id).await;
     assert_eq!(count(&held, "queued"), 3, "{held:#}");
     assert!(
         held["cases"]
@@ -391,12 +395,14 @@ async fn cancelling_spares_cases_another_sweep_wants_and_resubmitting_requeues()
     let (_, x) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
     let (_, y) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
     let (x, y) = (x["id"].as_i64().unwrap(), y["id"].as_i64().unwrap());
-    let (_, after_x) = post(&c, &format!("{url}/api/sweeps/{x}/cancel"), &json!({})).await;
+    post(&c, &format!("{url}/api/sweeps/{x}/cancel"), &json!({})).await;
+    let (_, after_x) = get_sweep(&c, &url, x).await;
     assert_eq!(
         after_x["cases"][0]["status"], "queued",
         "sweep {y} still wants it"
     );
-    let (_, after_y) = post(&c, &format!("{url}/api/sweeps/{y}/cancel"), &json!({})).await;
+    post(&c, &format!("{url}/api/sweeps/{y}/cancel"), &json!({})).await;
+    let (_, after_y) = get_sweep(&c, &url, y).await;
     assert_eq!(after_y["cases"][0]["status"], "cancelled");
     // A worker that dies while its case is being cancelled: when its lease
     // expires the case ends cancelled instead of going back to the queue.
@@ -420,6 +426,7 @@ async fn cancelling_spares_cases_another_sweep_wants_and_resubmitting_requeues()
     // Asking again queues the cancelled case again, and it runs.
     let (status, z) = post(&c, &format!("{url}/api/sweeps"), &spec).await;
     assert_eq!(status, StatusCode::CREATED);
+    let (_, z) = get_sweep(&c, &url, z["id"].as_i64().unwrap()).await;
     assert_eq!(z["cases"][0]["status"], "queued");
     assert_eq!(z["cached"], 0);
     let pool = WorkerPool::start(server.store(), pool_config(1));
@@ -451,7 +458,7 @@ async fn a_dead_workers_case_is_finished_once_by_another_after_its_lease_expires
         .unwrap()
         .expect("a case to claim");
     assert_eq!(ghost.attempt, 1);
-    let (_, held) = get(&c, &format!("{url}/api/sweeps/{id}")).await;
+    let (_, held) = get_sweep(&c, &url, id).await;
     assert_eq!(held["cases"][0]["status"], "running");
 
     // Another worker takes it over once the lease has expired.

@@ -63,6 +63,7 @@ pub fn router(app: App) -> Router {
         .route("/api/presets", get(list_presets))
         .route("/api/sweeps", post(submit_sweep).get(list_sweeps))
         .route("/api/sweeps/{id}", get(get_sweep))
+        .route("/api/sweeps/{id}/cases", get(sweep_cases))
         .route("/api/sweeps/{id}/pause", post(pause_sweep))
         .route("/api/sweeps/{id}/resume", post(resume_sweep))
         .route("/api/sweeps/{id}/cancel", post(cancel_sweep))
@@ -100,7 +101,7 @@ pub fn openapi() -> OpenApiDoc {
             KNOTSWEEP_TOKEN set on the server, POST requests need `Authorization: Bearer <token>` (401)."
     ),
     paths(
-        submit_sweep, list_sweeps, get_sweep, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
+        submit_sweep, list_sweeps, get_sweep, sweep_cases, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
         phase_diagram, get_case, case_series_csv, case_frames, list_presets, healthz, metrics
     ),
     components(schemas(
@@ -320,15 +321,15 @@ async fn submit_sweep(
     Ok((status, [(header::LOCATION, location)], Json(response)).into_response())
 }
 
-/// Largest `limit` of `GET /api/sweeps`.
+/// Largest `limit` of a paginated list.
 const MAX_PAGE: usize = 1000;
 
-/// One page of `GET /api/sweeps`.
+/// One page of a list (`GET /api/sweeps`, `GET /api/sweeps/{id}/cases`).
 #[derive(serde::Deserialize, utoipa::IntoParams)]
 struct Page {
-    /// Sweeps per page, 1..=1000 (default 100).
+    /// Items per page, 1..=1000 (default 100).
     limit: Option<usize>,
-    /// Sweeps to skip, oldest first (default 0).
+    /// Items to skip, in the list's order (default 0).
     offset: Option<usize>,
 }
 
@@ -336,10 +337,15 @@ struct Page {
 /// `X-Total-Count` gives the number of sweeps and `Link` the next page.
 #[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", params(Page),
     responses((status = 200, body = Vec<SweepSummary>), (status = 400, body = ErrorBody)))]
-async fn list_sweeps(
-    State(app): State<App>,
-    page: Result<axum::extract::Query<Page>, axum::extract::rejection::QueryRejection>,
-) -> Result<Response, ApiError> {
+async fn list_sweeps(State(app): State<App>, page: PageQuery) -> Result<Response, ApiError> {
+    let page = page_of(page)?;
+    paginate(app.core.list_sweeps().await?, page, "/api/sweeps")
+}
+
+type PageQuery = Result<axum::extract::Query<Page>, axum::extract::rejection::QueryRejection>;
+
+/// The page asked for: `limit` in 1..=MAX_PAGE (default 100), `offset` (default 0).
+fn page_of(page: PageQuery) -> Result<(usize, usize), ApiError> {
     let page = page.map_err(|e| ApiError::bad_request("query", e.body_text()))?.0;
     let limit = page.limit.unwrap_or(100);
     if !(1..=MAX_PAGE).contains(&limit) {
@@ -348,24 +354,36 @@ async fn list_sweeps(
             format!("must be in 1..={MAX_PAGE}, got {limit}"),
         ));
     }
-    let offset = page.offset.unwrap_or(0);
-    let all = app.core.list_sweeps().await?;
+    Ok((limit, page.offset.unwrap_or(0)))
+}
+
+/// One page of `all` as JSON, with `X-Total-Count` and a `Link: rel="next"`.
+fn paginate<T: serde::Serialize>(all: Vec<T>, (limit, offset): (usize, usize), path: &str) -> Result<Response, ApiError> {
     let total = all.len();
-    let items: Vec<SweepSummary> = all.into_iter().skip(offset).take(limit).collect();
+    let items: Vec<T> = all.into_iter().skip(offset).take(limit).collect();
     let mut response = Json(items).into_response();
     let headers = response.headers_mut();
     headers.insert("x-total-count", HeaderValue::from(total));
     if offset.saturating_add(limit) < total {
-        let next = format!(
-            "</api/sweeps?limit={limit}&offset={}>; rel=\"next\"",
-            offset + limit
-        );
+        let next = format!("<{path}?limit={limit}&offset={}>; rel=\"next\"", offset + limit);
         headers.insert(header::LINK, HeaderValue::from_str(&next).expect("ascii"));
     }
     Ok(response)
 }
 
-/// A sweep: counts per status, per-case progress, ETA.
+/// A sweep's cases in grid order: parameters, status, progress, inversion (paginated).
+#[utoipa::path(get, path = "/api/sweeps/{id}/cases", tag = "sweeps",
+    params(("id" = i64, Path), Page),
+    responses((status = 200, body = [SweepCaseView], headers(("x-total-count" = usize, description = "Cases in the sweep"),
+        ("link" = String, description = "The next page, when there is one"))),
+        (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
+async fn sweep_cases(State(app): State<App>, Id(id): Id, page: PageQuery) -> Result<Response, ApiError> {
+    let page = page_of(page)?;
+    let detail = app.core.sweep(id).await?;
+    paginate(detail.cases, page, &format!("/api/sweeps/{id}/cases"))
+}
+
+/// A sweep: counts per status, progress, ETA (its cases: `/api/sweeps/{id}/cases`).
 #[utoipa::path(get, path = "/api/sweeps/{id}", tag = "sweeps", params(("id" = i64, Path)),
     responses((status = 200, body = SweepDetail), (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
 async fn get_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {

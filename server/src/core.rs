@@ -420,6 +420,7 @@ fn links(id: i64) -> BTreeMap<String, String> {
             format!("/api/sweeps/{id}/phase-diagram"),
         ),
         ("events".to_string(), format!("/api/sweeps/{id}/events")),
+        ("cases".to_string(), format!("/api/sweeps/{id}/cases")),
     ])
 }
 

@@ -123,6 +123,10 @@ pub struct SweepDetail {
     pub eta_seconds: Option<f64>,
     /// Cases whose result was reused from an earlier computation.
     pub cached: i64,
+    /// The cases in grid order; served a page at a time by
+    /// `GET /api/sweeps/{id}/cases`, not with the sweep, so that polling a
+    /// sweep of any size stays small.
+    #[serde(skip)]
     pub cases: Vec<SweepCaseView>,
 }
 

@@ -116,7 +116,18 @@ pub async fn get_text(client: &reqwest::Client, url: &str) -> (StatusCode, Strin
     (status, r.text().await.expect("text"))
 }
 
-/// Polls `GET /api/sweeps/{id}` until `done` holds, panicking after `timeout`.
+/// `GET /api/sweeps/{id}` with its cases (`GET /api/sweeps/{id}/cases`) under `"cases"`.
+pub async fn get_sweep(client: &reqwest::Client, base: &str, id: i64) -> (StatusCode, Value) {
+    let (status, mut sweep) = get(client, &format!("{base}/api/sweeps/{id}")).await;
+    if status == StatusCode::OK {
+        let (s, cases) = get(client, &format!("{base}/api/sweeps/{id}/cases?limit=1000")).await;
+        assert_eq!(s, StatusCode::OK, "{cases}");
+        sweep["cases"] = cases;
+    }
+    (status, sweep)
+}
+
+/// Polls `GET /api/sweeps/{id}` (with its cases) until `done` holds, panicking after `timeout`.
 pub async fn wait_sweep(
     client: &reqwest::Client,
     base: &str,
@@ -126,7 +137,7 @@ pub async fn wait_sweep(
 ) -> Value {
     let start = Instant::now();
     loop {
-        let (status, sweep) = get(client, &format!("{base}/api/sweeps/{id}")).await;
+        let (status, sweep) = get_sweep(client, base, id).await;
         assert_eq!(status, StatusCode::OK, "{sweep}");
         if done(&sweep) {
             return sweep;
@@ -199,5 +210,39 @@ impl Drop for Children {
                 let _ = c.wait();
             }
         }
+    }
+}
+
+/// The PostgreSQL server the tests may use: `KNOTSWEEP_TEST_POSTGRES`, default
+/// `postgres://postgres@127.0.0.1:5432/test` (CI's).
+pub fn test_postgres() -> String {
+    std::env::var("KNOTSWEEP_TEST_POSTGRES").unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432/test".to_string())
+}
+
+/// A fresh database on the test PostgreSQL server: (its URL, the admin URL,
+/// its name), or why there is none (the caller skips, printing it).
+pub async fn fresh_postgres(tag: &str) -> Result<(String, String, String), String> {
+    use sqlx::Connection;
+    let admin = test_postgres();
+    let mut c = tokio::time::timeout(Duration::from_secs(5), sqlx::PgConnection::connect(&admin))
+        .await
+        .map_err(|_| format!("no answer from {admin} within 5 s"))?
+        .map_err(|e| format!("cannot connect to {admin}: {e}"))?;
+    let db = format!("ks_{tag}_{}_{}", std::process::id(), rand::random::<u32>());
+    sqlx::query(&format!("CREATE DATABASE {db}"))
+        .execute(&mut c)
+        .await
+        .map_err(|e| format!("cannot create a database on {admin}: {e}"))?;
+    let (base, _) = admin.rsplit_once('/').expect("URL has a database");
+    Ok((format!("{base}/{db}"), admin, db))
+}
+
+/// Drops a database made by [`fresh_postgres`].
+pub async fn drop_database(admin: &str, db: &str) {
+    use sqlx::Connection;
+    if let Ok(mut c) = sqlx::PgConnection::connect(admin).await {
+        let _ = sqlx::query(&format!("DROP DATABASE IF EXISTS {db} WITH (FORCE)"))
+            .execute(&mut c)
+            .await;
     }
 }

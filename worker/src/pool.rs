@@ -16,7 +16,7 @@ use crate::metrics::WorkerMetrics;
 use crate::store::{Claim, FailOutcome, Heartbeat, Store, StoreError, now_ms};
 use solver::protocol::{self, CaseReport, Progress, Status};
 use std::panic::AssertUnwindSafe;
-use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio::sync::{oneshot, watch};
@@ -39,6 +39,8 @@ pub struct PoolConfig {
     pub name: String,
     /// How long shutdown waits for a solver to notice its stop flag.
     pub shutdown_grace: Duration,
+    /// Claim at most this many cases in all, then let the slots end (batch jobs).
+    pub max_cases: Option<u64>,
 }
 
 impl PoolConfig {
@@ -52,6 +54,7 @@ impl PoolConfig {
             poll: Duration::from_millis(250),
             name: default_owner_name(),
             shutdown_grace: Duration::from_secs(5),
+            max_cases: None,
         }
     }
 
@@ -120,6 +123,8 @@ pub struct WorkerPool {
 }
 
 struct Ctx {
+    /// Claims made or being attempted, against `config.max_cases`.
+    reserved: AtomicU64,
     store: Arc<dyn Store>,
     config: Arc<PoolConfig>,
     metrics: Arc<WorkerMetrics>,
@@ -141,6 +146,7 @@ impl WorkerPool {
             .build()
             .expect("rayon pool starts");
         let ctx = Arc::new(Ctx {
+            reserved: AtomicU64::new(0),
             store,
             config: config.clone(),
             metrics: metrics.clone(),
@@ -165,6 +171,11 @@ impl WorkerPool {
 
     pub fn handle(&self) -> PoolHandle {
         self.handle.clone()
+    }
+
+    /// Every slot has ended (only after `max_cases` or a shutdown).
+    pub fn finished(&self) -> bool {
+        self.tasks.iter().all(|t| t.is_finished())
     }
 
     /// Stops claiming, releases the held leases and waits for the slots.
@@ -204,10 +215,20 @@ async fn slot_loop(ctx: Arc<Ctx>, slot: usize, mut shutdown: watch::Receiver<boo
             return;
         }
         ctx.last_poll[slot].store(now_ms(), Ordering::Relaxed);
+        if let Some(max) = ctx.config.max_cases {
+            if ctx.reserved.fetch_add(1, Ordering::SeqCst) >= max {
+                ctx.reserved.fetch_sub(1, Ordering::SeqCst);
+                tracing::info!(slot, max, "claimed the maximum number of cases; slot ends");
+                return;
+            }
+        }
         let claimed = match ctx.store.requeue_expired().await {
             Ok(_) => ctx.store.claim(&owner, ctx.config.lease).await,
             Err(e) => Err(e),
         };
+        if ctx.config.max_cases.is_some() && !matches!(claimed, Ok(Some(_))) {
+            ctx.reserved.fetch_sub(1, Ordering::SeqCst);
+        }
         match claimed {
             Ok(Some(claim)) => {
                 error_backoff = Duration::from_millis(100);

@@ -2,6 +2,9 @@
 //! SQLite (a temporary file) and PostgreSQL (a fresh database on the server
 //! at `KNOTSWEEP_TEST_POSTGRES`, default `postgres://postgres@127.0.0.1:5432/test`;
 //! skipped with a printed reason when that server does not answer).
+mod common;
+
+use common::{drop_database, fresh_postgres};
 use knotsweep_worker::store::{
     CaseState, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep, RetryPolicy, Store,
     StoreError, StoreOptions, SweepAction, SweepState, open_store,
@@ -39,37 +42,6 @@ impl Backend {
             drop_database(admin, db).await;
         }
     }
-}
-
-async fn drop_database(admin: &str, db: &str) {
-    use sqlx::Connection;
-    if let Ok(mut c) = sqlx::PgConnection::connect(admin).await {
-        let _ = sqlx::query(&format!("DROP DATABASE IF EXISTS {db} WITH (FORCE)"))
-            .execute(&mut c)
-            .await;
-    }
-}
-
-/// A fresh PostgreSQL database on the test server, or why there is none.
-pub async fn fresh_postgres(tag: &str) -> Result<(String, String, String), String> {
-    use sqlx::Connection;
-    let admin = std::env::var("KNOTSWEEP_TEST_POSTGRES")
-        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432/test".to_string());
-    let mut c = tokio::time::timeout(Duration::from_secs(5), sqlx::PgConnection::connect(&admin))
-        .await
-        .map_err(|_| format!("no answer from {admin} within 5 s"))?
-        .map_err(|e| format!("cannot connect to {admin}: {e}"))?;
-    let db = format!(
-        "ks_{tag}_{}_{}",
-        std::process::id(),
-        rand::random::<u32>()
-    );
-    sqlx::query(&format!("CREATE DATABASE {db}"))
-        .execute(&mut c)
-        .await
-        .map_err(|e| format!("cannot create a database on {admin}: {e}"))?;
-    let (base, _) = admin.rsplit_once('/').expect("URL has a database");
-    Ok((format!("{base}/{db}"), admin, db))
 }
 
 /// Every backend that can run here (SQLite always).

@@ -45,8 +45,15 @@ pub fn run(args: Args) -> Result<()> {
         )
         .await
         .with_context(|| format!("opening {url}"))?;
-        println!("queue benchmark on {}: {} no-op cases per row", url.split('@').next_back().unwrap_or(&url), args.cases);
-        println!("| claimers | claim+complete per s | queue time per case (ms) | overhead of a {} s case |", args.case_seconds);
+        println!(
+            "queue benchmark on {}: {} no-op cases per row",
+            url.split('@').next_back().unwrap_or(&url),
+            args.cases
+        );
+        println!(
+            "| claimers | claim+complete per s | queue time per case (ms) | overhead of a {} s case |",
+            args.case_seconds
+        );
         println!("|---|---|---|---|");
         // Distinct keys across rows and runs: a random offset in mu.
         let offset = rand::random::<f64>();

@@ -592,16 +592,26 @@ fn perturbation_section(doc: &mut String, get: &Lookup) -> Result<()> {
         let (j3, r3) = get(k3).context("perturbation case missing")?;
         let (_, r4) = get(k4).context("perturbation case missing")?;
         let cmd = command_of(j3).replace(" --n 3", "");
-        writeln!(doc, "| {what} | `{cmd} --n 3 / 4` | {} | {} |", describe(r3), describe(r4))?;
+        writeln!(
+            doc,
+            "| {what} | `{cmd} --n 3 / 4` | {} | {} |",
+            describe(r3),
+            describe(r4)
+        )?;
     }
     for (n, keys) in [
         (3, ["n3", "n3_seed1", "n3_seed2", "n3_seed3"]),
         (4, ["n4", "n4_seed1", "n4_seed2", "n4_seed3"]),
     ] {
-        let v: Vec<f64> = keys.iter().filter_map(|k| get(k).and_then(|(_, r)| inversion(r))).collect();
+        let v: Vec<f64> = keys
+            .iter()
+            .filter_map(|k| get(k).and_then(|(_, r)| inversion(r)))
+            .collect();
         if v.len() == keys.len() {
             let mean = v.iter().sum::<f64>() / v.len() as f64;
-            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(*x), b.max(*x))
+            });
             writeln!(
                 doc,
                 "\nn = {n}: the built and the three random starts invert at l_k bar {lo:.1} to {hi:.1} (spread {:.1} % of the mean).",

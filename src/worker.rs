@@ -49,7 +49,13 @@ async fn wait_for_stop(pool: &WorkerPool, idle: Option<Duration>) -> Stop {
         if pool.finished() {
             return Stop::MaxCases;
         }
-        if pool.handle().metrics.running.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        if pool
+            .handle()
+            .metrics
+            .running
+            .load(std::sync::atomic::Ordering::Relaxed)
+            > 0
+        {
             since = std::time::Instant::now();
         } else if idle.is_some_and(|d| since.elapsed() >= d) {
             return Stop::Idle;
@@ -93,7 +99,11 @@ pub fn run(args: Args) -> Result<()> {
         let cores = knotsweep_worker::pool::default_workers();
         let asked = args.queue.workers.unwrap_or(0);
         if asked > cores {
-            tracing::warn!(asked, cores, "more workers than cores available to this process: using {cores}");
+            tracing::warn!(
+                asked,
+                cores,
+                "more workers than cores available to this process: using {cores}"
+            );
         }
         let mut config = PoolConfig::new(asked.min(cores))
             .with_lease(Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)));

@@ -43,7 +43,14 @@ fn the_compose_file_is_valid_and_runs_postgres_a_server_and_scalable_workers() {
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for needle in ["postgres:", "server:", "worker:", "replicas: 2", "healthcheck:", "pgdata:"] {
+    for needle in [
+        "postgres:",
+        "server:",
+        "worker:",
+        "replicas: 2",
+        "healthcheck:",
+        "pgdata:",
+    ] {
         assert!(text.contains(needle), "no {needle} in\n{text}");
     }
 }
@@ -53,7 +60,9 @@ fn the_compose_file_is_valid_and_runs_postgres_a_server_and_scalable_workers() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_slurm_job_array_of_workers_drains_a_postgres_sweep() {
     if !installed("sbatch") {
-        println!("skipped: sbatch is not installed (slurm-wlm; deploy/slurm/local-cluster.sh starts a local cluster)");
+        println!(
+            "skipped: sbatch is not installed (slurm-wlm; deploy/slurm/local-cluster.sh starts a local cluster)"
+        );
         return;
     }
     let idle = Command::new("sinfo").args(["-h", "-o", "%T"]).output();
@@ -70,7 +79,12 @@ async fn a_slurm_job_array_of_workers_drains_a_postgres_sweep() {
     };
     let server = start(config(&db_url, 0)).await;
     let (url, c) = (server.url(), client());
-    let id = submit_sweep(&c, &url, &json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3, 0.5]}})).await;
+    let id = submit_sweep(
+        &c,
+        &url,
+        &json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3, 0.5]}}),
+    )
+    .await;
     let logs = tempfile::tempdir().unwrap();
     let script = format!("{}/deploy/slurm/worker.sbatch", env!("CARGO_MANIFEST_DIR"));
     let out = Command::new("sbatch")
@@ -109,7 +123,10 @@ async fn a_slurm_job_array_of_workers_drains_a_postgres_sweep() {
         .unwrap()
         .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
         .collect();
-    assert!(written.contains("reason=Idle"), "each task exits when idle:\n{written}");
+    assert!(
+        written.contains("reason=Idle"),
+        "each task exits when idle:\n{written}"
+    );
     server.shutdown().await.unwrap();
     drop_database(&admin, &db).await;
 }
@@ -117,7 +134,11 @@ async fn a_slurm_job_array_of_workers_drains_a_postgres_sweep() {
 /// Runs `ip` with `args`, panicking with its stderr on failure.
 fn ip(args: &[&str]) {
     let out = Command::new("ip").args(args).output().unwrap();
-    assert!(out.status.success(), "ip {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "ip {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// A network namespace joined to this one by a veth pair (/30 network).
@@ -139,7 +160,12 @@ impl Namespace {
         let out = Command::new("ip").args(["netns", "add", &name]).output();
         match out {
             Ok(o) if o.status.success() => {}
-            Ok(o) => return Err(format!("ip netns add: {}", String::from_utf8_lossy(&o.stderr).trim())),
+            Ok(o) => {
+                return Err(format!(
+                    "ip netns add: {}",
+                    String::from_utf8_lossy(&o.stderr).trim()
+                ));
+            }
             Err(e) => return Err(format!("no ip command: {e}")),
         }
         let ns = Self {
@@ -178,7 +204,9 @@ impl Drop for Namespace {
 /// Forwards TCP connections from `listen` to `target` (PostgreSQL listens on
 /// loopback only; the namespace reaches it through this relay on the veth address).
 async fn relay(listen: &str, target: String) -> String {
-    let listener = tokio::net::TcpListener::bind(format!("{listen}:0")).await.unwrap();
+    let listener = tokio::net::TcpListener::bind(format!("{listen}:0"))
+        .await
+        .unwrap();
     let addr = listener.local_addr().unwrap().to_string();
     tokio::spawn(async move {
         while let Ok((mut inbound, _)) = listener.accept().await {
@@ -213,7 +241,12 @@ async fn a_worker_cut_off_mid_case_loses_the_case_to_another_which_completes_it_
         }
     };
     let pg = test_postgres();
-    let hostport = pg.split('@').nth(1).and_then(|r| r.split('/').next()).unwrap().to_string();
+    let hostport = pg
+        .split('@')
+        .nth(1)
+        .and_then(|r| r.split('/').next())
+        .unwrap()
+        .to_string();
     let relayed = relay(&ns.host_ip, hostport).await;
     let remote_url = db_url.replacen(
         db_url.split('@').nth(1).unwrap().split('/').next().unwrap(),
@@ -224,16 +257,27 @@ async fn a_worker_cut_off_mid_case_loses_the_case_to_another_which_completes_it_
     let (url, c) = (server.url(), client());
     let id = submit_sweep(&c, &url, &json!({"base": long_base()})).await;
     let worker = |mut cmd: Command, url: &str| {
-        cmd.args(["worker", "--database-url", url, "--workers", "1", "--lease-seconds", "2"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null());
+        cmd.args([
+            "worker",
+            "--database-url",
+            url,
+            "--workers",
+            "1",
+            "--lease-seconds",
+            "2",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
         Killed(cmd.spawn().unwrap())
     };
     let mut in_namespace = Command::new("ip");
     in_namespace.args(["netns", "exec", &ns.name, BIN]);
     let _remote = worker(in_namespace, &remote_url);
     // The remote worker claims the case over the link.
-    let running = wait_sweep(&c, &url, id, Duration::from_secs(60), |s| s["cases"][0]["status"] == "running").await;
+    let running = wait_sweep(&c, &url, id, Duration::from_secs(60), |s| {
+        s["cases"][0]["status"] == "running"
+    })
+    .await;
     let case_id = running["cases"][0]["case_id"].as_i64().unwrap();
     let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
     let remote_owner = case["lease_owner"].as_str().unwrap().to_string();
@@ -243,15 +287,32 @@ async fn a_worker_cut_off_mid_case_loses_the_case_to_another_which_completes_it_
     wait_sweep(&c, &url, id, Duration::from_secs(180), finished).await;
     let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
     assert_eq!(case["status"], "completed", "{case:#}");
-    assert_eq!(case["attempts"], 2, "claimed again after the lease expired: {case:#}");
+    assert_eq!(
+        case["attempts"], 2,
+        "claimed again after the lease expired: {case:#}"
+    );
     let stored_by = case["result"]["worker"].as_str().unwrap();
-    assert_ne!(stored_by, remote_owner, "the cut-off worker cannot store a result");
-    let messages: Vec<&str> = case["logs"].as_array().unwrap().iter().filter_map(|l| l["message"].as_str()).collect();
+    assert_ne!(
+        stored_by, remote_owner,
+        "the cut-off worker cannot store a result"
+    );
+    let messages: Vec<&str> = case["logs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|l| l["message"].as_str())
+        .collect();
     assert!(
-        messages.iter().any(|m| m.contains(&format!("lease of worker {remote_owner} expired"))),
+        messages
+            .iter()
+            .any(|m| m.contains(&format!("lease of worker {remote_owner} expired"))),
         "{messages:#?}"
     );
-    assert_eq!(messages.iter().filter(|m| m.starts_with("result ")).count(), 1, "{messages:#?}");
+    assert_eq!(
+        messages.iter().filter(|m| m.starts_with("result ")).count(),
+        1,
+        "{messages:#?}"
+    );
     server.shutdown().await.unwrap();
     drop_database(&admin, &db).await;
 }

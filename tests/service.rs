@@ -1137,7 +1137,9 @@ async fn queue_figures() {
     .await;
     let elapsed = t.elapsed().as_secs_f64();
     pool.shutdown().await;
-    let store2 = SqliteStore::connect(&db2, SqliteOptions::default()).await.unwrap();
+    let store2 = SqliteStore::connect(&db2, SqliteOptions::default())
+        .await
+        .unwrap();
     let solver_ms = sqlx_count(
         &store2,
         "SELECT CAST(SUM(wall_time) * 1000 AS INTEGER) FROM results",

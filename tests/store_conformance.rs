@@ -155,7 +155,10 @@ async fn an_expired_lease_requeues_the_case_and_fences_out_its_old_holder() {
         let new = s.claim("alive", LEASE).await.unwrap().expect("claimable again");
         assert_eq!(new.lease.case_id, old.lease.case_id);
         assert_eq!(new.attempt, 2);
-        assert_eq!(s.heartbeat(&old.lease, None, LEASE).await.unwrap(), Heartbeat::Lost);
+        assert_eq!(
+            s.heartbeat(&old.lease, None, LEASE).await.unwrap(),
+            Heartbeat::Lost
+        );
         assert!(!s.complete(&old.lease, &report(old.params.clone())).await.unwrap());
         assert!(s.complete(&new.lease, &report(new.params.clone())).await.unwrap());
         let done = s.get_case(new.lease.case_id).await.unwrap().unwrap();
@@ -246,8 +249,12 @@ async fn sweeps_share_cases_by_key_and_reuse_results() {
         assert!(s.complete(&c.lease, &report(c.params.clone())).await.unwrap());
         let (bb, cached) = create(s, sweep(cases(3))).await;
         assert_eq!(cached, 1, "{}: the finished case is reused", b.name);
-        let ids = |v: Vec<knotsweep_worker::store::SweepCase>| v.iter().map(|c| c.case.id).collect::<Vec<_>>();
-        let (ia, ib) = (ids(s.sweep_cases(a).await.unwrap()), ids(s.sweep_cases(bb).await.unwrap()));
+        let ids =
+            |v: Vec<knotsweep_worker::store::SweepCase>| v.iter().map(|c| c.case.id).collect::<Vec<_>>();
+        let (ia, ib) = (
+            ids(s.sweep_cases(a).await.unwrap()),
+            ids(s.sweep_cases(bb).await.unwrap()),
+        );
         assert_eq!(ia[..], ib[..2], "{}: same keys, same rows", b.name);
         assert_eq!(s.case_sweeps(ia[0]).await.unwrap(), [a, bb]);
         b.close().await;
@@ -270,7 +277,10 @@ async fn a_repeated_idempotency_key_replays_or_conflicts() {
             CreateOutcome::Replayed { sweep } => assert_eq!(sweep.id, first, "{}", b.name),
             CreateOutcome::Created { .. } => panic!("{}: created twice", b.name),
         }
-        assert!(matches!(s.create_sweep(with("other")).await, Err(StoreError::Conflict(_))));
+        assert!(matches!(
+            s.create_sweep(with("other")).await,
+            Err(StoreError::Conflict(_))
+        ));
         assert_eq!(s.list_sweeps().await.unwrap().len(), 1);
         b.close().await;
     }

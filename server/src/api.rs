@@ -358,7 +358,11 @@ fn page_of(page: PageQuery) -> Result<(usize, usize), ApiError> {
 }
 
 /// One page of `all` as JSON, with `X-Total-Count` and a `Link: rel="next"`.
-fn paginate<T: serde::Serialize>(all: Vec<T>, (limit, offset): (usize, usize), path: &str) -> Result<Response, ApiError> {
+fn paginate<T: serde::Serialize>(
+    all: Vec<T>,
+    (limit, offset): (usize, usize),
+    path: &str,
+) -> Result<Response, ApiError> {
     let total = all.len();
     let items: Vec<T> = all.into_iter().skip(offset).take(limit).collect();
     let mut response = Json(items).into_response();

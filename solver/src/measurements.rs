@@ -152,7 +152,9 @@ pub fn braid_shape(points: &[Vector3<f64>], braid: &Braid) -> BraidShape {
     let nodes = || strands.iter().flat_map(|&(a, b)| points[a..=b + 1].iter());
     let count = strands.iter().map(|(a, b)| b + 2 - a).sum::<usize>() as f64;
     let centre = nodes().sum::<Vector3<f64>>() / count;
-    let covariance = nodes().fold(Matrix3::zeros(), |m, x| m + (x - centre) * (x - centre).transpose());
+    let covariance = nodes().fold(Matrix3::zeros(), |m, x| {
+        m + (x - centre) * (x - centre).transpose()
+    });
     let eigen = covariance.symmetric_eigen();
     let axis = eigen.eigenvectors.column(eigen.eigenvalues.imax()).into_owned();
     let (lo, hi) = nodes().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
@@ -161,7 +163,14 @@ pub fn braid_shape(points: &[Vector3<f64>], braid: &Braid) -> BraidShape {
     });
     let (p, q) = braid.loop_ends();
     let l_l: f64 = (p..q).map(|k| (points[k + 1] - points[k]).norm()).sum();
-    let tilt = |a: usize, b: usize| (points[b] - points[a]).normalize().dot(&axis).abs().min(1.0).acos();
+    let tilt = |a: usize, b: usize| {
+        (points[b] - points[a])
+            .normalize()
+            .dot(&axis)
+            .abs()
+            .min(1.0)
+            .acos()
+    };
     let l_b = hi - lo;
     BraidShape {
         l_b,

@@ -287,7 +287,10 @@ pub fn run_observed(
         let braid = measurements::braid(pairs, mid);
         let geometry = braid.map(|b| {
             let (p, q) = b.loop_ends();
-            (measurements::loop_geometry(&points, p, q), measurements::braid_shape(&points, &b))
+            (
+                measurements::loop_geometry(&points, p, q),
+                measurements::braid_shape(&points, &b),
+            )
         });
         let (width, height) = geometry.map_or((0.0, 0.0), |(g, _)| (g.width, g.height));
         let (epsilon, phi) = geometry.map_or((0.0, 0.0), |(_, b)| (b.epsilon, b.phi));

@@ -216,7 +216,8 @@ impl Drop for Children {
 /// The PostgreSQL server the tests may use: `KNOTSWEEP_TEST_POSTGRES`, default
 /// `postgres://postgres@127.0.0.1:5432/test` (CI's).
 pub fn test_postgres() -> String {
-    std::env::var("KNOTSWEEP_TEST_POSTGRES").unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432/test".to_string())
+    std::env::var("KNOTSWEEP_TEST_POSTGRES")
+        .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432/test".to_string())
 }
 
 /// A fresh database on the test PostgreSQL server: (its URL, the admin URL,

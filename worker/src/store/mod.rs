@@ -431,7 +431,9 @@ impl Default for StoreOptions {
 pub async fn open_store(url: &str, options: StoreOptions) -> StoreResult<std::sync::Arc<dyn Store>> {
     let scheme = url.split_once("://").map(|(s, _)| s);
     Ok(match scheme {
-        Some("postgres" | "postgresql") => std::sync::Arc::new(postgres::PgStore::connect(url, options).await?),
+        Some("postgres" | "postgresql") => {
+            std::sync::Arc::new(postgres::PgStore::connect(url, options).await?)
+        }
         Some("sqlite") | None => std::sync::Arc::new(
             sqlite::SqliteStore::connect(
                 url,

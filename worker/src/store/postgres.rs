@@ -235,13 +235,15 @@ impl Store for PgStore {
             let case_id: i64 = row.try_get("id")?;
             let is_done = row.try_get::<String, _>("status")? == "done";
             cached += usize::from(is_done);
-            sqlx::query("INSERT INTO sweep_cases (sweep_id, case_id, position, cached) VALUES ($1, $2, $3, $4)")
-                .bind(id)
-                .bind(case_id)
-                .bind(position as i64)
-                .bind(i64::from(is_done))
-                .execute(&mut *tx)
-                .await?;
+            sqlx::query(
+                "INSERT INTO sweep_cases (sweep_id, case_id, position, cached) VALUES ($1, $2, $3, $4)",
+            )
+            .bind(id)
+            .bind(case_id)
+            .bind(position as i64)
+            .bind(i64::from(is_done))
+            .execute(&mut *tx)
+            .await?;
         }
         notify(&mut *tx).await?;
         let record = Self::sweep_by_id(&mut *tx, id)
@@ -301,10 +303,12 @@ impl Store for PgStore {
     async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord> {
         let now = now_ms();
         let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(&format!("SELECT {SWEEP_COLUMNS} FROM sweeps WHERE id = $1 FOR UPDATE"))
-            .bind(id)
-            .fetch_optional(&mut *tx)
-            .await?;
+        let row = sqlx::query(&format!(
+            "SELECT {SWEEP_COLUMNS} FROM sweeps WHERE id = $1 FOR UPDATE"
+        ))
+        .bind(id)
+        .fetch_optional(&mut *tx)
+        .await?;
         let sweep = row
             .map(|r| sweep_from_row(&r))
             .transpose()?
@@ -392,17 +396,21 @@ impl Store for PgStore {
     }
 
     async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>> {
-        Ok(sqlx::query_scalar("SELECT series FROM results WHERE case_id = $1")
-            .bind(id)
-            .fetch_optional(&self.pool)
-            .await?)
+        Ok(
+            sqlx::query_scalar("SELECT series FROM results WHERE case_id = $1")
+                .bind(id)
+                .fetch_optional(&self.pool)
+                .await?,
+        )
     }
 
     async fn case_frames_json(&self, id: i64) -> StoreResult<Option<String>> {
-        Ok(sqlx::query_scalar("SELECT frames FROM results WHERE case_id = $1")
-            .bind(id)
-            .fetch_optional(&self.pool)
-            .await?)
+        Ok(
+            sqlx::query_scalar("SELECT frames FROM results WHERE case_id = $1")
+                .bind(id)
+                .fetch_optional(&self.pool)
+                .await?,
+        )
     }
 
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {

@@ -58,6 +58,8 @@ pub fn router(app: App) -> Router {
     let limits: Limits = *app.core.limits();
     let api = Router::new()
         .route("/", get(index))
+        .route("/assets/app.js", get(app_js))
+        .route("/assets/app.css", get(app_css))
         .route("/healthz", get(healthz))
         .route("/metrics", get(metrics))
         .route("/api/presets", get(list_presets))
@@ -210,6 +212,23 @@ async fn not_found() -> ApiError {
 
 async fn index() -> Html<&'static str> {
     Html(include_str!("../../web/index.html"))
+}
+
+/// The page's bundle (web/dist, built from web/src by `npm run build` and
+/// committed, so the binary needs no Node at build or run time).
+async fn app_js() -> impl IntoResponse {
+    asset("text/javascript; charset=utf-8", include_bytes!("../../web/dist/app.js"))
+}
+
+async fn app_css() -> impl IntoResponse {
+    asset("text/css; charset=utf-8", include_bytes!("../../web/dist/app.css"))
+}
+
+fn asset(content_type: &'static str, bytes: &'static [u8]) -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, content_type), (header::CACHE_CONTROL, "no-cache")],
+        bytes,
+    )
 }
 
 /// Health: database reachable and no embedded worker stalled.

@@ -230,7 +230,7 @@ pub struct CaseDetail {
     pub result: Option<ResultView>,
     /// The tightening series (one object per sample: time, l_k_bar,
     /// l_c_over_l, force, f_bar, width, height, h_bar, kinetic_energy (peak since the previous sample),
-    /// contacts, active_contacts, max_penetration_over_h, newton_iterations, dt), null
+    /// contacts, active_contacts, max_penetration_over_h, epsilon, phi, newton_iterations, dt), null
     /// before the result.
     #[schema(value_type = Option<Vec<Object>>)]
     pub series: Option<Value>,

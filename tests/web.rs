@@ -1,0 +1,303 @@
+//! The web page in a real browser: Debian's chromium driven through
+//! chromedriver (WebDriver over HTTP). Submit a custom sweep through the form,
+//! watch it finish, see its curves and phase diagram, open a case's 3D knot and
+//! move the frame slider, cancel a sweep from the list, and get a field error
+//! for a bad value. Screenshots land in `target/tmp/web-*.png`. Skipped, with
+//! the reason, when chromium or chromedriver is not installed.
+mod common;
+
+use common::*;
+use serde_json::{Value, json};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A WebDriver session on a headless chromium.
+struct Browser {
+    driver: Child,
+    base: String,
+    session: String,
+    http: reqwest::Client,
+}
+
+impl Browser {
+    async fn start() -> Result<Self, String> {
+        for tool in ["chromium", "chromedriver"] {
+            let found = Command::new("sh")
+                .args(["-c", &format!("command -v {tool}")])
+                .stdout(Stdio::null())
+                .status()
+                .is_ok_and(|s| s.success());
+            if !found {
+                return Err(format!("{tool} is not installed (apt-get install chromium chromium-driver)"));
+            }
+        }
+        let port = std::net::TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let driver = Command::new("chromedriver")
+            .arg(format!("--port={port}"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .map_err(|e| format!("chromedriver: {e}"))?;
+        let http = reqwest::Client::new();
+        let base = format!("http://127.0.0.1:{port}");
+        let t = Instant::now();
+        while http.get(format!("{base}/status")).send().await.is_err() {
+            if t.elapsed() > Duration::from_secs(20) {
+                return Err("chromedriver did not start".into());
+            }
+            tokio::time::sleep(Duration::from_millis(200)).await;
+        }
+        let args = [
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--enable-unsafe-swiftshader",
+            "--window-size=1280,1000",
+        ];
+        let caps = json!({"capabilities": {"alwaysMatch": {"goog:chromeOptions": {"args": args}}}});
+        let r: Value = http
+            .post(format!("{base}/session"))
+            .json(&caps)
+            .send()
+            .await
+            .map_err(|e| e.to_string())?
+            .json()
+            .await
+            .map_err(|e| e.to_string())?;
+        let session = r["value"]["sessionId"]
+            .as_str()
+            .ok_or_else(|| format!("no session: {r}"))?
+            .to_string();
+        Ok(Self {
+            driver,
+            base,
+            session,
+            http,
+        })
+    }
+
+    async fn call(&self, method: reqwest::Method, path: &str, body: Value) -> Value {
+        let url = format!("{}/session/{}{path}", self.base, self.session);
+        let r: Value = self
+            .http
+            .request(method, url)
+            .json(&body)
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        r["value"].clone()
+    }
+
+    async fn open(&self, url: &str) {
+        self.call(reqwest::Method::POST, "/url", json!({"url": url})).await;
+    }
+
+    /// Runs `script` (a function body; `arguments` are `args`) in the page.
+    async fn js(&self, script: &str, args: Value) -> Value {
+        self.call(
+            reqwest::Method::POST,
+            "/execute/sync",
+            json!({"script": script, "args": args}),
+        )
+        .await
+    }
+
+    /// Waits until `script` returns a truthy value; returns it.
+    async fn until(&self, what: &str, script: &str, timeout: Duration) -> Value {
+        let t = Instant::now();
+        loop {
+            let v = self.js(script, json!([])).await;
+            let truthy = !(v.is_null() || v == json!(false) || v == json!(0) || v == json!(""));
+            if truthy {
+                return v;
+            }
+            assert!(t.elapsed() < timeout, "timed out waiting for {what}");
+            tokio::time::sleep(Duration::from_millis(250)).await;
+        }
+    }
+
+    async fn screenshot(&self, name: &str) {
+        let png = self.call(reqwest::Method::GET, "/screenshot", Value::Null).await;
+        let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("web-{name}.png"));
+        std::fs::write(&path, base64_decode(png.as_str().unwrap())).unwrap();
+        println!("screenshot: {}", path.display());
+    }
+}
+
+impl Drop for Browser {
+    fn drop(&mut self) {
+        let _ = self.driver.kill();
+        let _ = self.driver.wait();
+    }
+}
+
+/// Standard base64 (the WebDriver screenshot encoding).
+fn base64_decode(text: &str) -> Vec<u8> {
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    };
+    let bytes: Vec<u8> = text.bytes().filter(|c| *c != b'=' && !c.is_ascii_whitespace()).collect();
+    let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
+    for chunk in bytes.chunks(4) {
+        let v: u32 = chunk
+            .iter()
+            .enumerate()
+            .map(|(i, c)| u32::from(value(*c)) << (18 - 6 * i))
+            .sum();
+        out.extend_from_slice(&v.to_be_bytes()[1..chunk.len()]);
+    }
+    out
+}
+
+/// Sets form inputs by id and fires their input events.
+const FILL: &str = "for (const [id, v] of Object.entries(arguments[0])) { const e = document.getElementById(id); \
+    e.value = v; e.dispatchEvent(new Event('input', {bubbles: true})); } return true;";
+
+/// Non-background pixels of the 3D canvas (read back from WebGL).
+const KNOT_PIXELS: &str = "const c = document.querySelector('#knot canvas'); if (!c) return 0; \
+    const gl = c.getContext('webgl2') || c.getContext('webgl'); const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight; \
+    const px = new Uint8Array(4 * w * h); gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px); \
+    let n = 0; for (let i = 0; i < px.length; i += 4) { if (Math.abs(px[i] - px[0]) + Math.abs(px[i + 1] - px[1]) + Math.abs(px[i + 2] - px[2]) > 30) n++; } \
+    return n / (w * h);";
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field_errors() {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => {
+            println!("skipped: {why}");
+            return;
+        }
+    };
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+
+    // Submit a custom sweep through the form generated from the schema.
+    browser.open(&format!("{url}/#/")).await;
+    browser
+        .until("the form", "return document.getElementById('p-h') !== null", Duration::from_secs(20))
+        .await;
+    let base = tiny_base();
+    let mut fields = serde_json::Map::new();
+    for (k, v) in base.as_object().unwrap() {
+        fields.insert(format!("p-{k}"), json!(v.to_string()));
+    }
+    fields.insert("g-mu".into(), json!("0.3, 0.5"));
+    browser.js(FILL, json!([fields])).await;
+    let count = browser
+        .js("return document.getElementById('count').textContent", json!([]))
+        .await;
+    assert_eq!(count, "2 cases", "live case count");
+    browser
+        .js("document.querySelector('#custom button[type=submit]').click(); return true", json!([]))
+        .await;
+    let hash = browser
+        .until("the sweep page", "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash", Duration::from_secs(20))
+        .await;
+    let id: i64 = hash.as_str().unwrap().rsplit('/').next().unwrap().parse().unwrap();
+    let (_, sweep) = get_sweep(&c, &url, id).await;
+    assert_eq!(sweep["total"], 2);
+    assert_eq!(sweep["spec"]["base"]["h"], json!(5e-3), "{sweep:#}");
+
+    // Progress moves to the end; the curves and the phase diagram appear.
+    let first = browser
+        .until("a progress bar", "const p = document.querySelector('#summary progress'); return p && String(p.value)", Duration::from_secs(20))
+        .await;
+    browser
+        .until(
+            "two curves per plot",
+            "const f = document.getElementById('plot-f'); return f && f.dataset.series === '2' && document.getElementById('plot-h').dataset.series === '2'",
+            Duration::from_secs(120),
+        )
+        .await;
+    let last = browser
+        .until("the full progress bar", "const p = document.querySelector('#summary progress'); return p && p.value >= 1 && String(p.value)", Duration::from_secs(60))
+        .await;
+    assert!(first.as_str().unwrap().parse::<f64>().unwrap() <= last.as_str().unwrap().parse::<f64>().unwrap());
+    let points = browser
+        .until("the phase diagram", "const p = document.getElementById('phase'); return p && p.dataset.points !== undefined && p.dataset.points", Duration::from_secs(30))
+        .await;
+    let inverted = sweep_inversions(&c, &url, id).await;
+    assert_eq!(points, json!(inverted.to_string()), "one point per inverted case");
+    let canvases = browser
+        .js("return document.querySelectorAll('#main canvas').length", json!([]))
+        .await;
+    assert!(canvases.as_u64().unwrap() >= 3, "F, H and phase plots: {canvases}");
+    browser.screenshot("sweep").await;
+
+    // The case page: a 3D knot that is drawn, and a slider that changes the frame.
+    browser
+        .js("document.querySelector('#cases a[href^=\"#/cases/\"]').click(); return true", json!([]))
+        .await;
+    browser
+        .until("the 3D canvas", "return document.querySelector('#knot canvas') !== null", Duration::from_secs(20))
+        .await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let drawn = browser.js(KNOT_PIXELS, json!([])).await.as_f64().unwrap();
+    assert!(drawn > 0.005, "the knot covers {drawn} of the canvas");
+    let label = browser.js("return document.getElementById('frame-label').textContent", json!([])).await;
+    let frames = browser
+        .js("const s = document.getElementById('frame'); return Number(s.max) + 1", json!([]))
+        .await;
+    assert!(frames.as_u64().unwrap() >= 2, "frames: {frames}");
+    browser
+        .js("const s = document.getElementById('frame'); s.value = s.value === '0' ? s.max : '0'; s.dispatchEvent(new Event('input')); return true", json!([]))
+        .await;
+    let moved = browser.js("return document.getElementById('frame-label').textContent", json!([])).await;
+    assert_ne!(label, moved, "the slider changes the frame");
+    browser.screenshot("case").await;
+
+    // Cancel from the sweeps list.
+    let long = submit_sweep(&c, &url, &json!({"base": long_base(), "grid": {"mu": [0.2, 0.4, 0.6]}})).await;
+    browser.open(&format!("{url}/#/")).await;
+    let selector = format!("#sweeps button[data-id=\"{long}\"][data-action=\"cancel\"]");
+    browser
+        .until("the cancel button", &format!("return document.querySelector('{selector}') !== null"), Duration::from_secs(20))
+        .await;
+    browser.js(&format!("document.querySelector('{selector}').click(); return true"), json!([])).await;
+    let t = Instant::now();
+    loop {
+        let (_, s) = get(&c, &format!("{url}/api/sweeps/{long}")).await;
+        if s["state"] == "cancelled" {
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(20), "not cancelled: {s:#}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    browser.screenshot("sweeps").await;
+
+    // A bad value: the API's field error next to the field.
+    browser.js(FILL, json!([{"p-h": "-1"}])).await;
+    browser
+        .js("document.querySelector('#custom button[type=submit]').click(); return true", json!([]))
+        .await;
+    let error = browser
+        .until("the field error", "const e = document.querySelector('.field-error[data-for=\"h\"]'); return e && e.textContent", Duration::from_secs(20))
+        .await;
+    assert!(error.as_str().unwrap().contains("base.h"), "{error}");
+    server.shutdown().await.unwrap();
+}
+
+/// Cases of the sweep with an inversion.
+async fn sweep_inversions(c: &reqwest::Client, url: &str, id: i64) -> usize {
+    let (_, pd) = get(c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    pd["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| !p["inversion"].is_null())
+        .count()
+}

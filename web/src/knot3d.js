@@ -1,0 +1,80 @@
+// The knot in 3D with three.js: the rod drawn as a tube of its true radius
+// around the stored centreline, orbit controls (rotate, zoom, pan) and a reset.
+import { AmbientLight, Box3, CatmullRomCurve3, Color, DirectionalLight, Mesh, MeshStandardMaterial, PerspectiveCamera, Scene, TubeGeometry, Vector3, WebGLRenderer } from "three";
+import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
+
+export class KnotView {
+  constructor(el, radius) {
+    this.el = el;
+    this.radius = radius;
+    this.renderer = new WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    el.appendChild(this.renderer.domElement);
+    this.renderer.domElement.setAttribute("role", "img");
+    this.renderer.domElement.setAttribute("aria-label", "the knot's centreline as a tube of the rod's radius");
+    this.scene = new Scene();
+    this.camera = new PerspectiveCamera(35, 1, 1e-4, 100);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.controls.addEventListener("change", () => this.render());
+    this.scene.add(new AmbientLight(0xffffff, 0.6));
+    const light = new DirectionalLight(0xffffff, 1.6);
+    light.position.set(1, 2, 3);
+    this.scene.add(light);
+    this.material = new MeshStandardMaterial({ color: 0x2e7dd7, roughness: 0.45, metalness: 0.05 });
+    this.mesh = null;
+    this.home = null;
+    this.resize();
+    window.addEventListener("resize", () => this.resize());
+  }
+
+  resize() {
+    const w = this.el.clientWidth || 600;
+    const h = Math.max(260, Math.min(480, w * 0.75));
+    this.renderer.setSize(w, h);
+    this.camera.aspect = w / h;
+    this.camera.updateProjectionMatrix();
+    this.render();
+  }
+
+  /** Shows the centreline `points` ([[x, y, z]...], m). */
+  show(points) {
+    if (this.mesh) {
+      this.scene.remove(this.mesh);
+      this.mesh.geometry.dispose();
+    }
+    // The knot sits in the middle of the rod: frame the part away from the tails.
+    const v = points.map((p) => new Vector3(p[0], p[1], p[2]));
+    const curve = new CatmullRomCurve3(v);
+    const geometry = new TubeGeometry(curve, Math.min(4000, v.length * 4), this.radius, 12, false);
+    this.mesh = new Mesh(geometry, this.material);
+    this.scene.add(this.mesh);
+    if (!this.home) {
+      const c = new Vector3();
+      v.forEach((p) => c.add(p));
+      c.divideScalar(v.length);
+      // Frame the knot: the points within the central third of the rod.
+      const core = v.slice(Math.floor(v.length / 3), Math.ceil((2 * v.length) / 3));
+      const box = new Box3().setFromPoints(core);
+      const size = box.getSize(new Vector3()).length() || 0.1;
+      const target = box.getCenter(new Vector3());
+      this.home = { target, position: target.clone().add(new Vector3(0, -1.6 * size, 0.6 * size)) };
+      this.reset();
+    }
+    this.render();
+  }
+
+  reset() {
+    if (!this.home) return;
+    this.camera.position.copy(this.home.position);
+    this.camera.up.set(0, 0, 1);
+    this.controls.target.copy(this.home.target);
+    this.controls.update();
+    this.render();
+  }
+
+  render() {
+    const bg = window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches ? 0x1b1d21 : 0xf4f6f8;
+    this.scene.background = new Color(bg);
+    this.renderer.render(this.scene, this.camera);
+  }
+}

@@ -1,0 +1,30 @@
+// knotsweep's web page: a hash router over three pages (sweeps and submission,
+// a sweep, a case), talking only to the public API.
+import { home } from "./home.js";
+import { sweepPage } from "./sweep.js";
+import { casePage } from "./case.js";
+import { token } from "./api.js";
+import { notice, $ } from "./util.js";
+
+async function route() {
+  const main = $("#main");
+  notice("");
+  const m = location.hash.match(/^#\/(sweeps|cases)\/(\d+)/);
+  try {
+    if (m && m[1] === "sweeps") await sweepPage(main, m[2]);
+    else if (m && m[1] === "cases") await casePage(main, m[2]);
+    else await home(main);
+  } catch (e) {
+    notice(String(e.message || e));
+  }
+  main.focus({ preventScroll: true });
+}
+
+$("#token").value = token.get();
+$("#token-form").onsubmit = (e) => {
+  e.preventDefault();
+  token.set($("#token").value.trim());
+  notice(token.get() ? "Token saved in this browser." : "Token removed.");
+};
+window.addEventListener("hashchange", route);
+route();

@@ -1,0 +1,98 @@
+// Plots with uPlot: curves of several cases overlaid on one x axis, markers
+// at each case's inversion, and a movable cursor line.
+import uPlot from "uplot";
+
+function dark() {
+  return window.matchMedia && window.matchMedia("(prefers-color-scheme: dark)").matches;
+}
+
+const axisColours = () => (dark() ? { stroke: "#ddd", grid: "#444" } : { stroke: "#222", grid: "#e5e5e5" });
+
+/**
+ * Overlaid curves. `curves`: [{label, colour, points: [[x, y]...], mark: x|null}].
+ * Returns {plot, setMarker(x)}: a dashed vertical line at x (the case page's frame).
+ */
+export function overlay(el, { title, x, y, curves, width }) {
+  const xs = [...new Set(curves.flatMap((c) => c.points.map((p) => p[0])))].sort((a, b) => a - b);
+  const index = new Map(xs.map((v, i) => [v, i]));
+  const data = [xs];
+  for (const c of curves) {
+    const ys = new Array(xs.length).fill(null);
+    for (const [px, py] of c.points) ys[index.get(px)] = py;
+    data.push(ys);
+  }
+  let marker = null;
+  const a = axisColours();
+  const opts = {
+    title,
+    width: width || Math.min(720, el.clientWidth || 720),
+    height: 300,
+    scales: { x: { time: false } },
+    axes: [
+      { label: x, stroke: a.stroke, grid: { stroke: a.grid } },
+      { label: y, stroke: a.stroke, grid: { stroke: a.grid } },
+    ],
+    series: [{ label: x }, ...curves.map((c) => ({ label: c.label, stroke: c.colour, width: 1.5, spanGaps: true, points: { show: false } }))],
+    hooks: {
+      draw: [
+        (u) => {
+          const ctx = u.ctx;
+          ctx.save();
+          ctx.setLineDash([4, 4]);
+          curves.forEach((c) => {
+            if (c.mark === null || c.mark === undefined) return;
+            const px = u.valToPos(c.mark, "x", true);
+            ctx.strokeStyle = c.colour;
+            ctx.beginPath();
+            ctx.moveTo(px, u.bbox.top);
+            ctx.lineTo(px, u.bbox.top + u.bbox.height);
+            ctx.stroke();
+          });
+          if (marker !== null) {
+            ctx.setLineDash([]);
+            ctx.strokeStyle = dark() ? "#fff" : "#000";
+            ctx.lineWidth = 2;
+            const px = u.valToPos(marker, "x", true);
+            ctx.beginPath();
+            ctx.moveTo(px, u.bbox.top);
+            ctx.lineTo(px, u.bbox.top + u.bbox.height);
+            ctx.stroke();
+          }
+          ctx.restore();
+        },
+      ],
+    },
+  };
+  el.innerHTML = "";
+  el.dataset.series = String(curves.length);
+  const plot = new uPlot(opts, data, el);
+  return {
+    plot,
+    setMarker(x) {
+      marker = x;
+      plot.redraw(false);
+    },
+  };
+}
+
+/** Points (x, y), one per case. */
+export function scatter(el, { title, x, y, points, width }) {
+  const xs = [...new Set(points.map((p) => p[0]))].sort((a, b) => a - b);
+  const pick = (list) => xs.map((v) => { const p = list.find((q) => q[0] === v); return p ? p[1] : null; });
+  const a = axisColours();
+  const series = [{ label: x }, { label: "inversion (full model)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, fill: "#0072b2" } }];
+  const data = [xs, pick(points)];
+  el.innerHTML = "";
+  el.dataset.points = String(points.length);
+  return new uPlot({
+    title,
+    width: width || Math.min(720, el.clientWidth || 720),
+    height: 300,
+    scales: { x: { time: false } },
+    axes: [
+      { label: x, stroke: a.stroke, grid: { stroke: a.grid } },
+      { label: y, stroke: a.stroke, grid: { stroke: a.grid } },
+    ],
+    series,
+  }, data, el);
+}

@@ -1,0 +1,129 @@
+// A sweep: live progress (server-sent events), F bar and H bar of every
+// finished case overlaid (paper Figs 6/8/10 a, b), the phase diagram
+// (Figs 7/9/11), the cases, and downloads.
+import { api, get } from "./api.js";
+import { esc, fmt, duration, when, notice, colour, download, $ } from "./util.js";
+import { overlay, scatter } from "./plot.js";
+
+/** Cases overlaid at most (the first ones in grid order). */
+const MAX_CURVES = 40;
+let source = null;
+
+export async function sweepPage(main, id) {
+  main.innerHTML = `
+    <p><a href="#/">← all sweeps</a></p>
+    <h1 id="title">Sweep #${esc(id)}</h1>
+    <div id="summary" aria-live="polite">Loading…</div>
+    <div class="actions" id="actions"></div>
+    <section aria-labelledby="curves-h"><h2 id="curves-h">Tightening curves</h2>
+      <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div></section>
+    <section aria-labelledby="phase-h"><h2 id="phase-h">Phase diagram</h2><div id="phase" class="plot"></div>
+      <p class="hint" id="phase-note"></p></section>
+    <section aria-labelledby="cases-h"><h2 id="cases-h">Cases</h2>
+      <div class="table-wrap"><table><thead><tr><th scope="col">Case</th><th scope="col">Parameters</th><th scope="col">Status</th>
+        <th scope="col">Progress</th><th scope="col">Inversion l_k bar</th><th scope="col">Wall time</th></tr></thead>
+        <tbody id="cases"></tbody></table></div></section>
+    <section aria-labelledby="dl-h"><h2 id="dl-h">Downloads</h2>
+      <p><a href="/api/sweeps/${esc(id)}/phase-diagram" download="sweep-${esc(id)}-phase-diagram.json">phase diagram (JSON)</a> ·
+      <button type="button" id="all-csv">all series (CSV)</button> ·
+      <a href="/api/sweeps/${esc(id)}">sweep (JSON)</a></p></section>`;
+  const state = { id, seriesOf: new Map(), drawn: "" };
+  $("#all-csv").onclick = () => allSeries(state);
+  await refresh(state);
+  if (source) source.close();
+  source = new EventSource(`/api/sweeps/${id}/events`);
+  let pending = null;
+  const later = () => {
+    if (!location.hash.startsWith(`#/sweeps/${id}`)) { source.close(); return; }
+    clearTimeout(pending);
+    pending = setTimeout(() => refresh(state), 300);
+  };
+  source.addEventListener("progress", later);
+  source.addEventListener("done", () => { later(); source.close(); });
+}
+
+async function refresh(state) {
+  const { id } = state;
+  let sweep, cases;
+  try {
+    [sweep, cases] = await Promise.all([get(`/api/sweeps/${id}`), get(`/api/sweeps/${id}/cases?limit=1000`)]);
+  } catch (e) {
+    notice(e.message);
+    return;
+  }
+  $("#title").textContent = `Sweep #${sweep.id} ${sweep.name || sweep.preset || ""}`;
+  const counts = Object.entries(sweep.counts).map(([k, v]) => `${esc(k)} ${v}`).join(", ");
+  $("#summary").innerHTML = `<p><span class="status s-${esc(sweep.status)}">${esc(sweep.status)}</span>
+    <progress max="1" value="${sweep.progress}" aria-label="sweep progress"></progress> ${fmt(100 * sweep.progress, 0)} %
+    · ETA ${duration(sweep.eta_seconds)} · ${sweep.total} cases (${counts}) · varied: ${esc(sweep.varied.join(", ") || "none")}
+    · created ${when(sweep.created_at)}</p>`;
+  const live = sweep.state !== "cancelled" && sweep.status !== "done";
+  $("#actions").innerHTML = live
+    ? (sweep.state === "paused" ? `<button type="button" data-a="resume">Resume</button>` : `<button type="button" data-a="pause">Pause</button>`) +
+      ` <button type="button" data-a="cancel">Cancel</button>`
+    : "";
+  for (const b of document.querySelectorAll("#actions button")) {
+    b.onclick = async () => {
+      try { await api("POST", `/api/sweeps/${id}/${b.dataset.a}`, {}); notice(""); } catch (e) { notice(e.message); }
+      refresh(state);
+    };
+  }
+  const axisName = sweep.varied[0];
+  $("#cases").innerHTML = cases.map((c, i) => `<tr>
+    <td><a href="#/cases/${c.case_id}"><span class="swatch" style="background:${colour(i)}"></span>case ${c.case_id}</a></td>
+    <td>${esc(Object.entries(c.params).map(([k, v]) => `${k} = ${v}`).join(", "))}</td>
+    <td><span class="status s-${esc(c.status)}">${esc(c.status)}</span>${c.reason ? ` <span class="hint">${esc(c.reason)}</span>` : ""}</td>
+    <td><progress max="1" value="${c.progress}" aria-label="case ${c.case_id} progress"></progress></td>
+    <td>${c.inversion ? fmt(c.inversion.l_k_bar) : "–"}</td><td>${c.wall_time ? duration(c.wall_time) : "–"}</td></tr>`).join("");
+  // Curves of the finished cases (fetched once each).
+  const finished = cases.slice(0, MAX_CURVES).filter((c) => c.progress >= 1 || c.wall_time);
+  await Promise.all(finished.filter((c) => !state.seriesOf.has(c.case_id)).map(async (c) => {
+    const detail = await get(`/api/cases/${c.case_id}`);
+    state.seriesOf.set(c.case_id, detail.series || []);
+  }));
+  const key = finished.map((c) => c.case_id).join(",");
+  if (key !== state.drawn) {
+    state.drawn = key;
+    const label = (c) => Object.entries(c.params).map(([k, v]) => `${k} = ${v}`).join(", ") || `case ${c.case_id}`;
+    const curves = (pick) => finished.map((c) => ({
+      label: label(c),
+      colour: colour(cases.indexOf(c)),
+      points: (state.seriesOf.get(c.case_id) || []).map((s) => [s.l_k_bar, pick(s)]),
+      mark: c.inversion ? c.inversion.l_k_bar : null,
+    }));
+    if (finished.length) {
+      overlay($("#plot-f"), { title: "F bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "F bar", curves: curves((s) => s.f_bar) });
+      overlay($("#plot-h"), { title: "H bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "H bar", curves: curves((s) => s.h_bar) });
+    } else {
+      $("#plot-f").textContent = "Curves appear as cases finish.";
+    }
+  }
+  const pd = await get(`/api/sweeps/${id}/phase-diagram`);
+  if (axisName) {
+    const scale = axisName === "h" ? 1e3 : 1;
+    const points = pd.points.filter((p) => p.inversion).map((p) => [Number(p.params[axisName]) * scale, p.inversion.l_k_bar]);
+    scatter($("#phase"), {
+      title: `critical l_k bar against ${axisName}${axisName === "h" ? " (mm)" : ""}`,
+      x: axisName === "h" ? "h (mm)" : axisName,
+      y: "critical l_k bar",
+      points,
+    });
+    const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
+    $("#phase-note").textContent = none.length ? "Without an inversion: " + none.join("; ") : "";
+  } else {
+    $("#phase").textContent = pd.points[0] && pd.points[0].inversion ? `Inversion at l_k bar ${fmt(pd.points[0].inversion.l_k_bar)}` : "A single case: no axis to plot.";
+  }
+}
+
+async function allSeries(state) {
+  const cases = await get(`/api/sweeps/${state.id}/cases?limit=1000`);
+  let out = "";
+  for (const c of cases) {
+    const r = await fetch(`/api/cases/${c.case_id}/series.csv`);
+    if (!r.ok) continue;
+    const lines = (await r.text()).trim().split("\n");
+    if (!out) out = "case_id," + lines[0] + "\n";
+    out += lines.slice(1).map((l) => `${c.case_id},${l}`).join("\n") + "\n";
+  }
+  download(`sweep-${state.id}-series.csv`, out, "text/csv");
+}

@@ -106,6 +106,13 @@ pub struct Progress {
 const MAX_PENETRATION: f64 = 0.5;
 /// Frames kept around the newest sample for the inversion snapshots.
 const FRAME_HISTORY: usize = 40;
+/// Stored frames (the report's size budget, about 20 kB each at K = 301): one
+/// every `FRAME_SPACING` in l_k bar along the pull, and every
+/// `SNAP_FRAME_SPACING` within `SNAP_WINDOW` either side of the inversion, so
+/// that a viewer steps through the snap (about 40 frames in all).
+const FRAME_SPACING: f64 = 20.0;
+const SNAP_FRAME_SPACING: f64 = 2.0;
+const SNAP_WINDOW: f64 = 10.0;
 /// Damping rate (1/s) while relaxing.
 const RELAX_DAMPING: f64 = 20.0;
 
@@ -248,6 +255,9 @@ pub fn run_observed(
     world.rods[0].move_clamp(End::Finish, axis * params.pull_speed);
     let start_l_k_bar = l_k_bar_of(&world);
     let mut next_sample = start_l_k_bar;
+    let mut next_frame = start_l_k_bar - FRAME_SPACING;
+    // After the inversion: the next dense frame and where the dense frames stop.
+    let mut after_snap: Option<(f64, f64)> = None;
     let mut history: VecDeque<Frame> = VecDeque::with_capacity(FRAME_HISTORY);
     let criteria = InversionCriteria::default();
     // The loop's middle node, from the builder and then tracked from each sample's braid ends.
@@ -322,18 +332,44 @@ pub fn run_observed(
         if report.inversion.is_none() {
             report.inversion = measurements::detect_inversion(&report.series, &criteria);
             if let Some(inv) = &report.inversion {
-                let at = |label: &str, l: f64| {
-                    history
+                let snap = inv.l_k_bar;
+                // The detection lags the snap: the frames on both sides are in the history.
+                let mut stored: Vec<f64> = Vec::new();
+                let mut offset = SNAP_WINDOW;
+                while offset >= -SNAP_WINDOW {
+                    let label = match offset {
+                        o if o == 0.0 => "at_inversion",
+                        o if o == SNAP_FRAME_SPACING => "before_inversion",
+                        o if o > 0.0 => "near_inversion",
+                        _ => "after_inversion",
+                    };
+                    let nearest = history
                         .iter()
-                        .min_by(|a, b| (a.l_k_bar - l).abs().total_cmp(&(b.l_k_bar - l).abs()))
-                        .map(|f| Frame {
-                            label: label.to_string(),
-                            ..f.clone()
-                        })
-                };
-                report.frames.extend(at("before_inversion", inv.l_k_bar + 2.0));
-                report.frames.extend(at("at_inversion", inv.l_k_bar));
+                        .filter(|f| offset > 0.0 || f.l_k_bar <= snap)
+                        .min_by(|a, b| (a.l_k_bar - snap - offset).abs().total_cmp(&(b.l_k_bar - snap - offset).abs()));
+                    if let Some(f) = nearest.filter(|f| (f.l_k_bar - snap - offset).abs() < SNAP_FRAME_SPACING / 2.0) {
+                        if !stored.contains(&f.l_k_bar) {
+                            stored.push(f.l_k_bar);
+                            report.frames.push(Frame {
+                                label: label.to_string(),
+                                ..f.clone()
+                            });
+                        }
+                    }
+                    offset -= SNAP_FRAME_SPACING;
+                }
+                let lowest = stored.iter().copied().fold(snap, f64::min);
+                after_snap = Some((lowest - SNAP_FRAME_SPACING, snap - SNAP_WINDOW));
             }
+        } else if let Some((next, end)) = after_snap {
+            if l_k_bar <= next && l_k_bar >= end {
+                report.frames.push(frame(&world, "after_inversion", l_k_bar));
+                after_snap = Some((l_k_bar - SNAP_FRAME_SPACING, end));
+            }
+        }
+        if l_k_bar <= next_frame {
+            report.frames.push(frame(&world, "pull", l_k_bar));
+            next_frame = l_k_bar - FRAME_SPACING;
         }
         let det = knot::knot_determinant(&points).ok();
         if det != Some(expected) {

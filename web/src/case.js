@@ -8,7 +8,10 @@ import { KnotView } from "./knot3d.js";
 
 const LABELS = {
   relaxed: "relaxed start",
+  pull: "pulling",
+  near_inversion: "approaching the inversion",
   before_inversion: "just before the inversion",
+  after_inversion: "after the inversion",
   at_inversion: "inversion",
   final: "end of the pull",
   failure: "where it failed",

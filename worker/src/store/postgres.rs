@@ -526,23 +526,35 @@ impl Store for PgStore {
 
     async fn claim(&self, owner: &str, lease: Duration) -> StoreResult<Option<Claim>> {
         let now = now_ms();
+        // One statement claims and logs. Its commit need not wait for the WAL
+        // flush: a claim lost in a server crash leaves the case queued, and
+        // the worker's next heartbeat finds the lease gone.
+        let mut tx = self.pool.begin().await?;
+        sqlx::query("SET LOCAL synchronous_commit = off").execute(&mut *tx).await?;
         let row = sqlx::query(
-            "UPDATE cases SET status = 'running', lease_owner = $1, lease_expires_at = $2, fence = fence + 1, \
-               attempts = attempts + 1, started_at = $3, progress = 0, progress_detail = NULL, cancel_requested = 0 \
-             WHERE id = ( \
-               SELECT c.id FROM cases c WHERE c.status = 'queued' AND c.not_before <= $3 \
-                 AND EXISTS (SELECT 1 FROM sweep_cases sc JOIN sweeps s ON s.id = sc.sweep_id \
-                             WHERE sc.case_id = c.id AND s.state = 'active') \
-               ORDER BY c.id LIMIT 1 FOR UPDATE SKIP LOCKED) \
-             RETURNING id, case_key, params, fence, attempts",
+            "WITH claimed AS ( \
+               UPDATE cases SET status = 'running', lease_owner = $1, lease_expires_at = $2, fence = fence + 1, \
+                 attempts = attempts + 1, started_at = $3, progress = 0, progress_detail = NULL, cancel_requested = 0 \
+               WHERE id = ( \
+                 SELECT c.id FROM cases c WHERE c.status = 'queued' AND c.not_before <= $3 \
+                   AND EXISTS (SELECT 1 FROM sweep_cases sc JOIN sweeps s ON s.id = sc.sweep_id \
+                               WHERE sc.case_id = c.id AND s.state = 'active') \
+                 ORDER BY c.id LIMIT 1 FOR UPDATE SKIP LOCKED) \
+               RETURNING id, case_key, params, fence, attempts), \
+             logged AS ( \
+               INSERT INTO case_logs (case_id, at, level, message) \
+               SELECT id, $3, 'info', 'claimed by ' || $1 || ' (attempt ' || attempts || ', fence ' || fence || ')' \
+               FROM claimed) \
+             SELECT id, case_key, params, fence, attempts FROM claimed",
         )
         .bind(owner)
         .bind(now + ms(lease))
         .bind(now)
-        .fetch_optional(&self.pool)
+        .fetch_optional(&mut *tx)
         .await?;
+        tx.commit().await?;
         let Some(row) = row else { return Ok(None) };
-        let claim = Claim {
+        Ok(Some(Claim {
             lease: Lease {
                 case_id: row.try_get("id")?,
                 owner: owner.to_string(),
@@ -551,18 +563,7 @@ impl Store for PgStore {
             key: row.try_get("case_key")?,
             params: json(&row.try_get::<String, _>("params")?, "case params")?,
             attempt: row.try_get::<i64, _>("attempts")? as u32,
-        };
-        log(
-            &self.pool,
-            claim.lease.case_id,
-            "info",
-            &format!(
-                "claimed by {owner} (attempt {}, fence {})",
-                claim.attempt, claim.lease.fence
-            ),
-        )
-        .await?;
-        Ok(Some(claim))
+        }))
     }
 
     async fn heartbeat(

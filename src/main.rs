@@ -1,7 +1,6 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
 mod bench_queue;
-mod plot;
 mod queue_args;
 mod reproduce;
 mod run;

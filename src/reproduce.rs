@@ -1,9 +1,9 @@
 //! `knotsweep reproduce`: reruns the paper's Sec. 4 checks with the full model
 //! and writes `docs/VALIDATION.md` (a table of command, figure and pass/fail)
 //! with SVG curves of F bar and H bar for the n sweep (paper Fig. 8 a, b).
-use crate::plot::{Curve, line_chart};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use knotsweep_server::figures::{CaseCurve, Quantity, tightening_chart};
 use rayon::prelude::*;
 use solver::case::{CaseParams, FrictionLaw};
 use solver::protocol::{self, CaseReport, Status};
@@ -267,34 +267,23 @@ pub fn run(args: Args) -> Result<()> {
             .map(|i| (&jobs[i], &reports[i]))
     };
     let doc = report(&get, &simplified)?;
-    for (file, y_label, pick) in [
-        (
-            "n_sweep_F_bar.svg",
-            "F bar",
-            (|s: &solver::measurements::Sample| s.f_bar) as fn(&_) -> f64,
-        ),
-        (
-            "n_sweep_H_bar.svg",
-            "H bar",
-            |s: &solver::measurements::Sample| s.h_bar,
-        ),
+    for (file, quantity, name) in [
+        ("n_sweep_F_bar.svg", Quantity::FBar, "F bar"),
+        ("n_sweep_H_bar.svg", Quantity::HBar, "H bar"),
     ] {
-        let mut curves = Vec::new();
-        let labels = ["n = 1", "n = 2", "n = 3", "n = 4"];
-        for (key, label) in ["n1", "n2", "n3", "n4"].into_iter().zip(labels) {
-            if let Some((_, r)) = get(key) {
-                curves.push(Curve {
-                    label,
-                    points: r.series.iter().map(|s| (s.l_k_bar, pick(s))).collect(),
-                });
-            }
-        }
-        let svg = line_chart(
-            &format!("{y_label} against l_k bar, h = 1.6 mm, mu = 0.1"),
-            "l_k bar",
-            y_label,
+        let curves: Vec<CaseCurve> = ["n1", "n2", "n3", "n4"]
+            .into_iter()
+            .filter_map(|key| get(key))
+            .map(|(j, r)| CaseCurve {
+                label: format!("n = {}", j.params.n),
+                series: &r.series,
+                inversion: None,
+            })
+            .collect();
+        let svg = tightening_chart(
+            &format!("{name} against l_k bar, h = 1.6 mm, mu = 0.1"),
+            quantity,
             &curves,
-            &[],
         )?;
         std::fs::write(args.figures.join(file), svg)?;
     }

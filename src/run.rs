@@ -2,6 +2,7 @@
 //! bar; writes the JSON report, optionally the series as CSV and SVG plots.
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use knotsweep_server::figures::{CaseCurve, Quantity, tightening_chart};
 use serde::Serialize;
 use solver::case::CaseParams;
 use solver::protocol::{self, CaseReport, Status};
@@ -223,24 +224,13 @@ fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let p = &report.params;
     let label = format!("n = {}, h = {} mm, mu = {}", p.n, p.h * 1e3, p.mu);
-    let markers: Vec<f64> = report.inversion.iter().map(|i| i.l_k_bar).collect();
-    for (file, y_label, pick) in [
-        (
-            "F_bar.svg",
-            "F bar = F h^2 / EI",
-            (|s: &solver::measurements::Sample| s.f_bar) as fn(&_) -> f64,
-        ),
-        (
-            "H_bar.svg",
-            "H bar = H / W",
-            |s: &solver::measurements::Sample| s.h_bar,
-        ),
-    ] {
-        let curve = crate::plot::Curve {
-            label: &label,
-            points: report.series.iter().map(|s| (s.l_k_bar, pick(s))).collect(),
-        };
-        let svg = crate::plot::line_chart(&label, "l_k bar = (L - l_c) / h", y_label, &[curve], &markers)?;
+    let case = [CaseCurve {
+        label: label.clone(),
+        series: &report.series,
+        inversion: report.inversion.map(|i| i.l_k_bar),
+    }];
+    for (file, quantity) in [("F_bar.svg", Quantity::FBar), ("H_bar.svg", Quantity::HBar)] {
+        let svg = tightening_chart(&label, quantity, &case)?;
         let path = dir.join(file);
         std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
     }

@@ -146,6 +146,37 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     let (status, frames) = get(&c, &format!("{url}/api/cases/{case_id}/frames")).await;
     assert_eq!(status, StatusCode::OK);
     assert_eq!(frames[0]["points"].as_array().unwrap().len(), 121);
+    // Its figures: the charts `knotsweep run --plot` writes, drawn from the stored series.
+    let (status, svg) = get_text(&c, &format!("{url}/api/cases/{case_id}/figures/f_bar.svg")).await;
+    assert_eq!(status, StatusCode::OK);
+    let samples: Vec<solver::measurements::Sample> = serde_json::from_value(case["series"].clone()).unwrap();
+    let p = &case["params"];
+    let label = format!(
+        "n = {}, h = {} mm, mu = {}",
+        p["n"],
+        p["h"].as_f64().unwrap() * 1e3,
+        p["mu"]
+    );
+    let expected = knotsweep_server::figures::tightening_chart(
+        &label,
+        knotsweep_server::figures::Quantity::FBar,
+        &[knotsweep_server::figures::CaseCurve {
+            label: label.clone(),
+            series: &samples,
+            inversion: case["result"]["inversion"]["l_k_bar"].as_f64(),
+        }],
+    )
+    .unwrap();
+    assert_eq!(svg, expected);
+    let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/h_bar.svg")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(
+        svg.starts_with("<svg") && svg.contains("mu = 0.1"),
+        "{}",
+        &svg[..200.min(svg.len())]
+    );
+    let (status, _) = get(&c, &format!("{url}/api/cases/{case_id}/figures/k_bar.svg")).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
 
     // Operations: list, metrics, health, OpenAPI, Swagger UI, the page.
     let (_, list) = get(&c, &format!("{url}/api/sweeps")).await;

@@ -28,7 +28,9 @@ impl Browser {
                 .status()
                 .is_ok_and(|s| s.success());
             if !found {
-                return Err(format!("{tool} is not installed (apt-get install chromium chromium-driver)"));
+                return Err(format!(
+                    "{tool} is not installed (apt-get install chromium chromium-driver)"
+                ));
             }
         }
         let port = std::net::TcpListener::bind("127.0.0.1:0")
@@ -87,18 +89,13 @@ impl Browser {
         if method != reqwest::Method::GET {
             request = request.json(&body);
         }
-        let r: Value = request
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let r: Value = request.send().await.unwrap().json().await.unwrap();
         r["value"].clone()
     }
 
     async fn open(&self, url: &str) {
-        self.call(reqwest::Method::POST, "/url", json!({"url": url})).await;
+        self.call(reqwest::Method::POST, "/url", json!({"url": url}))
+            .await;
     }
 
     /// Runs `script` (a function body; `arguments` are `args`) in the page.
@@ -149,7 +146,10 @@ fn base64_decode(text: &str) -> Vec<u8> {
         b'+' => 62,
         _ => 63,
     };
-    let bytes: Vec<u8> = text.bytes().filter(|c| *c != b'=' && !c.is_ascii_whitespace()).collect();
+    let bytes: Vec<u8> = text
+        .bytes()
+        .filter(|c| *c != b'=' && !c.is_ascii_whitespace())
+        .collect();
     let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
     for chunk in bytes.chunks(4) {
         let v: u32 = chunk
@@ -189,7 +189,11 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     // Submit a custom sweep through the form generated from the schema.
     browser.open(&format!("{url}/#/")).await;
     browser
-        .until("the form", "return document.getElementById('p-h') !== null", Duration::from_secs(20))
+        .until(
+            "the form",
+            "return document.getElementById('p-h') !== null",
+            Duration::from_secs(20),
+        )
         .await;
     let base = tiny_base();
     let mut fields = serde_json::Map::new();
@@ -203,19 +207,37 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .await;
     assert_eq!(count, "2 cases", "live case count");
     browser
-        .js("document.querySelector('#custom button[type=submit]').click(); return true", json!([]))
+        .js(
+            "document.querySelector('#custom button[type=submit]').click(); return true",
+            json!([]),
+        )
         .await;
     let hash = browser
-        .until("the sweep page", "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash", Duration::from_secs(20))
+        .until(
+            "the sweep page",
+            "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash",
+            Duration::from_secs(20),
+        )
         .await;
-    let id: i64 = hash.as_str().unwrap().rsplit('/').next().unwrap().parse().unwrap();
+    let id: i64 = hash
+        .as_str()
+        .unwrap()
+        .rsplit('/')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     let (_, sweep) = get_sweep(&c, &url, id).await;
     assert_eq!(sweep["total"], 2);
     assert_eq!(sweep["spec"]["base"]["h"], json!(5e-3), "{sweep:#}");
 
     // Progress moves to the end; the curves and the phase diagram appear.
     let first = browser
-        .until("a progress bar", "const p = document.querySelector('#summary progress'); return p && String(p.value)", Duration::from_secs(20))
+        .until(
+            "a progress bar",
+            "const p = document.querySelector('#summary progress'); return p && String(p.value)",
+            Duration::from_secs(20),
+        )
         .await;
     browser
         .until(
@@ -227,48 +249,90 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     let last = browser
         .until("the full progress bar", "const p = document.querySelector('#summary progress'); return p && p.value >= 1 && String(p.value)", Duration::from_secs(60))
         .await;
-    assert!(first.as_str().unwrap().parse::<f64>().unwrap() <= last.as_str().unwrap().parse::<f64>().unwrap());
+    assert!(
+        first.as_str().unwrap().parse::<f64>().unwrap() <= last.as_str().unwrap().parse::<f64>().unwrap()
+    );
     let points = browser
         .until("the phase diagram", "const p = document.getElementById('phase'); return p && p.dataset.points !== undefined && p.dataset.points", Duration::from_secs(30))
         .await;
     let inverted = sweep_inversions(&c, &url, id).await;
     assert_eq!(points, json!(inverted.to_string()), "one point per inverted case");
     let canvases = browser
-        .js("return document.querySelectorAll('#main canvas').length", json!([]))
+        .js(
+            "return document.querySelectorAll('#main canvas').length",
+            json!([]),
+        )
         .await;
-    assert!(canvases.as_u64().unwrap() >= 3, "F, H and phase plots: {canvases}");
+    assert!(
+        canvases.as_u64().unwrap() >= 3,
+        "F, H and phase plots: {canvases}"
+    );
     browser.screenshot("sweep").await;
 
     // The case page: a 3D knot that is drawn, and a slider that changes the frame.
     browser
-        .js("document.querySelector('#cases a[href^=\"#/cases/\"]').click(); return true", json!([]))
+        .js(
+            "document.querySelector('#cases a[href^=\"#/cases/\"]').click(); return true",
+            json!([]),
+        )
         .await;
     browser
-        .until("the 3D canvas", "return document.querySelector('#knot canvas') !== null", Duration::from_secs(20))
+        .until(
+            "the 3D canvas",
+            "return document.querySelector('#knot canvas') !== null",
+            Duration::from_secs(20),
+        )
         .await;
     tokio::time::sleep(Duration::from_millis(500)).await;
     let drawn = browser.js(KNOT_PIXELS, json!([])).await.as_f64().unwrap();
     assert!(drawn > 0.005, "the knot covers {drawn} of the canvas");
-    let label = browser.js("return document.getElementById('frame-label').textContent", json!([])).await;
+    let label = browser
+        .js(
+            "return document.getElementById('frame-label').textContent",
+            json!([]),
+        )
+        .await;
     let frames = browser
-        .js("const s = document.getElementById('frame'); return Number(s.max) + 1", json!([]))
+        .js(
+            "const s = document.getElementById('frame'); return Number(s.max) + 1",
+            json!([]),
+        )
         .await;
     assert!(frames.as_u64().unwrap() >= 2, "frames: {frames}");
     browser
         .js("const s = document.getElementById('frame'); s.value = s.value === '0' ? s.max : '0'; s.dispatchEvent(new Event('input')); return true", json!([]))
         .await;
-    let moved = browser.js("return document.getElementById('frame-label').textContent", json!([])).await;
+    let moved = browser
+        .js(
+            "return document.getElementById('frame-label').textContent",
+            json!([]),
+        )
+        .await;
     assert_ne!(label, moved, "the slider changes the frame");
     browser.screenshot("case").await;
 
     // Cancel from the sweeps list.
-    let long = submit_sweep(&c, &url, &json!({"base": long_base(), "grid": {"mu": [0.2, 0.4, 0.6]}})).await;
+    let long = submit_sweep(
+        &c,
+        &url,
+        &json!({"base": long_base(), "grid": {"mu": [0.2, 0.4, 0.6]}}),
+    )
+    .await;
     browser.open(&format!("{url}/#/")).await;
     let selector = format!("#sweeps button[data-id=\"{long}\"][data-action=\"cancel\"]");
     browser
-        .until("the cancel button", &format!("return document.querySelector('{selector}') !== null"), Duration::from_secs(20))
+        .until(
+            "the cancel button",
+            &format!("return document.querySelector('{selector}') !== null"),
+            Duration::from_secs(20),
+        )
         .await;
-    browser.js(&format!("document.querySelector('{selector}').click(); return true"), json!([])).await;
+    browser
+        .js(
+            &format!("document.querySelector('{selector}').click(); return true"),
+            json!([]),
+        )
+        .await;
     let t = Instant::now();
     loop {
         let (_, s) = get(&c, &format!("{url}/api/sweeps/{long}")).await;
@@ -283,10 +347,17 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     // A bad value: the API's field error next to the field.
     browser.js(FILL, json!([{"p-h": "-1"}])).await;
     browser
-        .js("document.querySelector('#custom button[type=submit]').click(); return true", json!([]))
+        .js(
+            "document.querySelector('#custom button[type=submit]').click(); return true",
+            json!([]),
+        )
         .await;
     let error = browser
-        .until("the field error", "const e = document.querySelector('.field-error[data-for=\"h\"]'); return e && e.textContent", Duration::from_secs(20))
+        .until(
+            "the field error",
+            "const e = document.querySelector('.field-error[data-for=\"h\"]'); return e && e.textContent",
+            Duration::from_secs(20),
+        )
         .await;
     assert!(error.as_str().unwrap().contains("base.h"), "{error}");
     server.shutdown().await.unwrap();

@@ -20,6 +20,7 @@
 //! needs `Authorization: Bearer <token>` (401 otherwise).
 use crate::core::{self, Core};
 use crate::error::{ApiError, ErrorBody};
+use crate::figures::Quantity;
 use crate::spec::{FieldError, Limits, Preset, SweepSpec};
 use crate::views::*;
 use axum::body::Bytes;
@@ -74,6 +75,8 @@ pub fn router(app: App) -> Router {
         .route("/api/cases/{id}", get(get_case))
         .route("/api/cases/{id}/series.csv", get(case_series_csv))
         .route("/api/cases/{id}/frames", get(case_frames))
+        .route("/api/cases/{id}/figures/{figure}", get(case_figure))
+        .route("/api/sweeps/{id}/figures/{figure}", get(sweep_figure))
         .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
         .fallback(not_found)
         .layer(axum::middleware::from_fn(json_method_not_allowed))
@@ -103,7 +106,7 @@ pub fn openapi() -> OpenApiDoc {
             KNOTSWEEP_TOKEN set on the server, POST requests need `Authorization: Bearer <token>` (401)."
     ),
     paths(
-        submit_sweep, list_sweeps, get_sweep, sweep_cases, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
+        submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
         phase_diagram, get_case, case_series_csv, case_frames, list_presets, healthz, metrics
     ),
     components(schemas(
@@ -217,16 +220,25 @@ async fn index() -> Html<&'static str> {
 /// The page's bundle (web/dist, built from web/src by `npm run build` and
 /// committed, so the binary needs no Node at build or run time).
 async fn app_js() -> impl IntoResponse {
-    asset("text/javascript; charset=utf-8", include_bytes!("../../web/dist/app.js"))
+    asset(
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../web/dist/app.js"),
+    )
 }
 
 async fn app_css() -> impl IntoResponse {
-    asset("text/css; charset=utf-8", include_bytes!("../../web/dist/app.css"))
+    asset(
+        "text/css; charset=utf-8",
+        include_bytes!("../../web/dist/app.css"),
+    )
 }
 
 fn asset(content_type: &'static str, bytes: &'static [u8]) -> impl IntoResponse {
     (
-        [(header::CONTENT_TYPE, content_type), (header::CACHE_CONTROL, "no-cache")],
+        [
+            (header::CONTENT_TYPE, content_type),
+            (header::CACHE_CONTROL, "no-cache"),
+        ],
         bytes,
     )
 }
@@ -535,6 +547,53 @@ async fn case_series_csv(State(app): State<App>, Id(id): Id) -> Result<Response,
         csv,
     )
         .into_response())
+}
+
+/// `{id}` and a figure name `f_bar.svg` or `h_bar.svg` from the path.
+fn figure_path(id: &str, figure: &str) -> Result<(i64, Quantity), ApiError> {
+    let id = id
+        .parse()
+        .map_err(|_| ApiError::bad_request("id", format!("must be an integer, got {id:?}")))?;
+    let quantity = figure
+        .strip_suffix(".svg")
+        .and_then(Quantity::parse)
+        .ok_or_else(|| {
+            ApiError::new(
+                StatusCode::NOT_FOUND,
+                "not_found",
+                "figures: f_bar.svg, h_bar.svg",
+                vec![],
+            )
+        })?;
+    Ok((id, quantity))
+}
+
+fn svg(text: String) -> Response {
+    ([(header::CONTENT_TYPE, "image/svg+xml")], text).into_response()
+}
+
+/// F bar or H bar against l_k bar of a case as SVG (the figure of `knotsweep run --plot`).
+#[utoipa::path(get, path = "/api/cases/{id}/figures/{figure}", tag = "cases",
+    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg or h_bar.svg")),
+    responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
+async fn case_figure(
+    State(app): State<App>,
+    Path((id, figure)): Path<(String, String)>,
+) -> Result<Response, ApiError> {
+    let (id, quantity) = figure_path(&id, &figure)?;
+    Ok(svg(app.core.case_figure(id, quantity).await?))
+}
+
+/// F bar or H bar against l_k bar of every finished case of a sweep, overlaid, as SVG.
+#[utoipa::path(get, path = "/api/sweeps/{id}/figures/{figure}", tag = "sweeps",
+    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg or h_bar.svg")),
+    responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
+async fn sweep_figure(
+    State(app): State<App>,
+    Path((id, figure)): Path<(String, String)>,
+) -> Result<Response, ApiError> {
+    let (id, quantity) = figure_path(&id, &figure)?;
+    Ok(svg(app.core.sweep_figure(id, quantity).await?))
 }
 
 /// Centreline snapshots of a case (`[{label, l_k_bar, points: [[x, y, z], ...]}]`).

@@ -2,6 +2,7 @@
 //! `knotsweep sweep`) as a method over the store. The HTTP handlers in
 //! [`crate::api`] only extract, call one of these and serialise.
 use crate::error::CoreError;
+use crate::figures::{self, CaseCurve, Quantity};
 use crate::spec::{self, FieldError, Limits, SweepSpec};
 use crate::strict_json;
 use crate::views::*;
@@ -310,17 +311,68 @@ impl Core {
         })
     }
 
+    /// A case's stored series; 404 before the result.
+    async fn series(&self, c: &CaseRecord) -> Result<Vec<Sample>, CoreError> {
+        let text =
+            self.store.case_series_json(c.id).await?.ok_or_else(|| {
+                CoreError::NotFound(format!("result of case {} (status {})", c.id, c.status()))
+            })?;
+        serde_json::from_str(&text)
+            .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))
+    }
+
     /// The series as CSV (one row per sample); 404 before the result.
     pub async fn series_csv(&self, id: i64) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
-        let text = self
-            .store
-            .case_series_json(id)
-            .await?
-            .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))?;
-        let series: Vec<Sample> = serde_json::from_str(&text)
-            .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
-        Ok(solver::measurements::series_csv(&series))
+        Ok(solver::measurements::series_csv(&self.series(&c).await?))
+    }
+
+    /// F bar or H bar against l_k bar of a case as SVG: the figure of
+    /// `knotsweep run --plot`; 404 before the result.
+    pub async fn case_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
+        let c = self.case_record(id).await?;
+        let series = self.series(&c).await?;
+        let p = &c.params;
+        let label = format!("n = {}, h = {} mm, mu = {}", p.n, p.h * 1e3, p.mu);
+        let curve = CaseCurve {
+            label: label.clone(),
+            series: &series,
+            inversion: inversion_of(&c),
+        };
+        figures::tightening_chart(&label, quantity, &[curve]).map_err(|e| CoreError::Figure(e.to_string()))
+    }
+
+    /// The curves of every finished case of a sweep overlaid (grid order),
+    /// their inversions marked.
+    pub async fn sweep_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
+        let detail = self.sweep(id).await?;
+        let mut loaded = Vec::new();
+        for view in &detail.cases {
+            let c = self.case_record(view.case_id).await?;
+            if c.result.is_some() {
+                let label = view
+                    .params
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                loaded.push((label, self.series(&c).await?, inversion_of(&c)));
+            }
+        }
+        let curves: Vec<CaseCurve> = loaded
+            .iter()
+            .map(|(label, series, inversion)| CaseCurve {
+                label: if label.is_empty() {
+                    format!("sweep {id}")
+                } else {
+                    label.clone()
+                },
+                series,
+                inversion: *inversion,
+            })
+            .collect();
+        figures::tightening_chart(&format!("sweep {id}"), quantity, &curves)
+            .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
     /// The frames (centreline snapshots) as stored JSON; 404 before the result.
@@ -570,4 +622,9 @@ pub fn action(name: &str) -> Option<SweepAction> {
         "cancel" => Some(SweepAction::Cancel),
         _ => None,
     }
+}
+
+/// l_k bar of a case's inversion, if it has a result with one.
+fn inversion_of(c: &CaseRecord) -> Option<f64> {
+    c.result.as_ref().and_then(|r| r.inversion).map(|i| i.l_k_bar)
 }

@@ -23,6 +23,9 @@ pub enum CoreError {
     Conflict(String),
     #[error("storage: {0}")]
     Store(StoreError),
+    /// A figure could not be drawn (500).
+    #[error("figure: {0}")]
+    Figure(String),
 }
 
 impl From<StoreError> for CoreError {
@@ -104,6 +107,15 @@ impl From<CoreError> for ApiError {
                 vec![],
             ),
             CoreError::Conflict(m) => Self::new(StatusCode::CONFLICT, "conflict", m, vec![]),
+            CoreError::Figure(m) => {
+                tracing::error!(error = %m, "figure failed");
+                Self::new(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "internal",
+                    format!("figure: {m}"),
+                    vec![],
+                )
+            }
             CoreError::Store(e) => {
                 tracing::error!(error = %e, "store error");
                 Self::new(

@@ -13,6 +13,7 @@
 pub mod api;
 pub mod core;
 pub mod error;
+pub mod figures;
 mod http;
 pub mod openapi;
 pub mod spec;

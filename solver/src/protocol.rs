@@ -346,8 +346,14 @@ pub fn run_observed(
                     let nearest = history
                         .iter()
                         .filter(|f| offset > 0.0 || f.l_k_bar <= snap)
-                        .min_by(|a, b| (a.l_k_bar - snap - offset).abs().total_cmp(&(b.l_k_bar - snap - offset).abs()));
-                    if let Some(f) = nearest.filter(|f| (f.l_k_bar - snap - offset).abs() < SNAP_FRAME_SPACING / 2.0) {
+                        .min_by(|a, b| {
+                            (a.l_k_bar - snap - offset)
+                                .abs()
+                                .total_cmp(&(b.l_k_bar - snap - offset).abs())
+                        });
+                    if let Some(f) =
+                        nearest.filter(|f| (f.l_k_bar - snap - offset).abs() < SNAP_FRAME_SPACING / 2.0)
+                    {
                         if !stored.contains(&f.l_k_bar) {
                             stored.push(f.l_k_bar);
                             report.frames.push(Frame {

@@ -53,7 +53,9 @@ export async function casePage(main, id) {
     <section aria-labelledby="dl-h"><h2 id="dl-h">Series and downloads</h2>
       <p><a href="/api/cases/${esc(id)}/series.csv" download="case-${esc(id)}.csv">series (CSV)</a> ·
         <a href="/api/cases/${esc(id)}" download="case-${esc(id)}.json">case (JSON)</a> ·
-        <a href="/api/cases/${esc(id)}/frames" download="case-${esc(id)}-frames.json">frames (JSON)</a></p>
+        <a href="/api/cases/${esc(id)}/frames" download="case-${esc(id)}-frames.json">frames (JSON)</a> ·
+        <a href="/api/cases/${esc(id)}/figures/f_bar.svg" download="case-${esc(id)}-F_bar.svg">F bar figure (SVG)</a> ·
+        <a href="/api/cases/${esc(id)}/figures/h_bar.svg" download="case-${esc(id)}-H_bar.svg">H bar figure (SVG)</a></p>
       <div class="table-wrap series"><table id="series"></table></div></section>`;
   const series = c.series || [];
   const mark = inv ? inv.l_k_bar : null;

@@ -530,7 +530,9 @@ impl Store for PgStore {
         // flush: a claim lost in a server crash leaves the case queued, and
         // the worker's next heartbeat finds the lease gone.
         let mut tx = self.pool.begin().await?;
-        sqlx::query("SET LOCAL synchronous_commit = off").execute(&mut *tx).await?;
+        sqlx::query("SET LOCAL synchronous_commit = off")
+            .execute(&mut *tx)
+            .await?;
         let row = sqlx::query(
             "WITH claimed AS ( \
                UPDATE cases SET status = 'running', lease_owner = $1, lease_expires_at = $2, fence = fence + 1, \

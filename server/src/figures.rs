@@ -1,6 +1,68 @@
-//! Publication-style SVG line charts (plotters' SVG backend, no fonts needed).
+//! Publication-style SVG figures (plotters' SVG backend, no fonts needed): the
+//! same F bar and H bar charts for `knotsweep run --plot`, the sweep API and
+//! the web page's downloads.
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
+use solver::measurements::Sample;
+
+/// What a tightening chart plots against l_k bar (paper Fig. 5 a, b).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    FBar,
+    HBar,
+}
+
+impl Quantity {
+    /// From a figure's file stem (`f_bar`, `h_bar`).
+    pub fn parse(stem: &str) -> Option<Self> {
+        match stem {
+            "f_bar" => Some(Self::FBar),
+            "h_bar" => Some(Self::HBar),
+            _ => None,
+        }
+    }
+
+    pub fn axis_label(self) -> &'static str {
+        match self {
+            Self::FBar => "F bar = F h^2 / EI",
+            Self::HBar => "H bar = H / W",
+        }
+    }
+
+    pub fn of(self, s: &Sample) -> f64 {
+        match self {
+            Self::FBar => s.f_bar,
+            Self::HBar => s.h_bar,
+        }
+    }
+}
+
+/// One case's tightening curve: its label, series and inversion l_k bar.
+pub struct CaseCurve<'a> {
+    pub label: String,
+    pub series: &'a [Sample],
+    pub inversion: Option<f64>,
+}
+
+/// F bar or H bar against l_k bar for one or more cases (paper Figs 5, 6, 8,
+/// 10 a, b), the inversions marked by vertical lines.
+pub fn tightening_chart(title: &str, quantity: Quantity, cases: &[CaseCurve]) -> Result<String> {
+    let curves: Vec<Curve> = cases
+        .iter()
+        .map(|c| Curve {
+            label: &c.label,
+            points: c.series.iter().map(|s| (s.l_k_bar, quantity.of(s))).collect(),
+        })
+        .collect();
+    let markers: Vec<f64> = cases.iter().filter_map(|c| c.inversion).collect();
+    line_chart(
+        title,
+        "l_k bar = (L - l_c) / h",
+        quantity.axis_label(),
+        &curves,
+        &markers,
+    )
+}
 
 /// One curve of a chart.
 pub struct Curve<'a> {

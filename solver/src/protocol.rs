@@ -54,6 +54,19 @@ pub struct Frame {
     pub label: String,
     pub l_k_bar: f64,
     pub points: Vec<[f64; 3]>,
+    /// The contacts carrying load at this frame (empty in frames stored before
+    /// they were recorded).
+    #[serde(default)]
+    pub contacts: Vec<FrameContact>,
+}
+
+/// A loaded contact of a frame: the closest points on the two segments (m)
+/// and the magnitude of the contact force (N).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameContact {
+    pub a: [f64; 3],
+    pub b: [f64; 3],
+    pub force: f64,
 }
 
 /// Counts and timings of a run.
@@ -441,14 +454,29 @@ fn l_k_bar(world: &World, params: &CaseParams) -> f64 {
 
 /// A snapshot of the world's rod.
 fn frame(world: &World, label: &str, l_k_bar: f64) -> Frame {
+    let points = world.rods[0].positions();
+    let contacts = world
+        .contacts()
+        .iter()
+        .zip(world.contact_forces())
+        .filter(|(_, f)| f.norm() > 0.0)
+        .map(|(c, f)| {
+            let [a0, a1, b0, b1] = c.nodes;
+            let [w0, w1, w2, w3] = c.weights;
+            let a = points[a0] * w0 + points[a1] * w1;
+            let b = -(points[b0] * w2 + points[b1] * w3);
+            FrameContact {
+                a: [a.x, a.y, a.z],
+                b: [b.x, b.y, b.z],
+                force: f.norm(),
+            }
+        })
+        .collect();
     Frame {
         label: label.to_string(),
         l_k_bar,
-        points: world.rods[0]
-            .positions()
-            .iter()
-            .map(|p| [p.x, p.y, p.z])
-            .collect(),
+        points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),
+        contacts,
     }
 }
 

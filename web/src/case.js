@@ -46,7 +46,8 @@ export async function casePage(main, id) {
         <output id="frame-label" for="frame"></output>
         <button type="button" id="reset">Reset view</button>
       </div>
-      <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${frames.length} stored frames${invIndex >= 0 ? "; the inversion frame is marked ★" : ""}.</p>
+      <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${frames.length} stored frames${invIndex >= 0 ? "; the inversion frame is marked ★" : ""}.
+        Beads mark the loaded contacts, coloured from blue (weakest) to red (strongest force of the frame).</p>
     </section>
     <section aria-labelledby="curves-h"><h2 id="curves-h">Tightening curves</h2>
       <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div></section>
@@ -74,8 +75,11 @@ export async function casePage(main, id) {
   const slider = $("#frame");
   const show = () => {
     const fr = frames[Number(slider.value)];
-    view.show(fr.points);
-    $("#frame-label").textContent = `${Number(slider.value) + 1}/${frames.length}: l_k bar ${fmt(fr.l_k_bar)} (${LABELS[fr.label] || fr.label})${fr.label === "at_inversion" ? " ★" : ""}`;
+    const contacts = fr.contacts || [];
+    view.show(fr.points, contacts);
+    const largest = contacts.length ? Math.max(...contacts.map((c) => c.force)) : 0;
+    $("#frame-label").textContent = `${Number(slider.value) + 1}/${frames.length}: l_k bar ${fmt(fr.l_k_bar)} (${LABELS[fr.label] || fr.label})${fr.label === "at_inversion" ? " ★" : ""}` +
+      ` · ${contacts.length} loaded contacts${contacts.length ? `, largest force ${largest.toExponential(2)} N` : ""}`;
     f?.setMarker(fr.l_k_bar);
     h?.setMarker(fr.l_k_bar);
   };

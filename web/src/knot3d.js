@@ -1,6 +1,6 @@
 // The knot in 3D with three.js: the rod drawn as a tube of its true radius
 // around the stored centreline, orbit controls (rotate, zoom, pan) and a reset.
-import { AmbientLight, Box3, CatmullRomCurve3, Color, DirectionalLight, Mesh, MeshStandardMaterial, PerspectiveCamera, Scene, TubeGeometry, Vector3, WebGLRenderer } from "three";
+import { InstancedMesh, Matrix4, SphereGeometry, MeshBasicMaterial, AmbientLight, Box3, CatmullRomCurve3, Color, DirectionalLight, Mesh, MeshStandardMaterial, PerspectiveCamera, Scene, TubeGeometry, Vector3, WebGLRenderer } from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 
 export class KnotView {
@@ -22,6 +22,7 @@ export class KnotView {
     this.scene.add(light);
     this.material = new MeshStandardMaterial({ color: 0x2e7dd7, roughness: 0.45, metalness: 0.05 });
     this.mesh = null;
+    this.marks = null;
     this.home = null;
     this.resize();
     window.addEventListener("resize", () => this.resize());
@@ -36,11 +37,33 @@ export class KnotView {
     this.render();
   }
 
-  /** Shows the centreline `points` ([[x, y, z]...], m). */
-  show(points) {
+  /**
+   * Shows the centreline `points` ([[x, y, z]...], m) and the loaded contacts
+   * ([{a, b, force}]) as beads between the touching surfaces, coloured from
+   * blue (weakest) to red (strongest force of the frame).
+   */
+  show(points, contacts = []) {
     if (this.mesh) {
       this.scene.remove(this.mesh);
       this.mesh.geometry.dispose();
+    }
+    if (this.marks) {
+      this.scene.remove(this.marks);
+      this.marks.geometry.dispose();
+      this.marks = null;
+    }
+    if (contacts.length) {
+      const largest = Math.max(...contacts.map((c) => c.force)) || 1;
+      const bead = new SphereGeometry(this.radius * 0.6, 12, 8);
+      this.marks = new InstancedMesh(bead, new MeshBasicMaterial(), contacts.length);
+      const m = new Matrix4();
+      contacts.forEach((c, i) => {
+        m.makeTranslation((c.a[0] + c.b[0]) / 2, (c.a[1] + c.b[1]) / 2, (c.a[2] + c.b[2]) / 2);
+        this.marks.setMatrixAt(i, m);
+        const t = c.force / largest;
+        this.marks.setColorAt(i, new Color().setHSL((1 - t) * 0.66, 0.9, 0.5));
+      });
+      this.scene.add(this.marks);
     }
     // The knot sits in the middle of the rod: frame the part away from the tails.
     const v = points.map((p) => new Vector3(p[0], p[1], p[2]));

@@ -122,6 +122,9 @@ async function schema() {
 }
 
 const SKIP = new Set(["initial_shape"]);
+/** The parameters a study varies first, in the paper's order; the rest follow alphabetically. */
+const FIRST = ["n", "h", "mu", "length", "nodes", "friction_law", "rolling", "gravity"];
+const rank = (name) => (FIRST.includes(name) ? FIRST.indexOf(name) : FIRST.length);
 
 function kind(p) {
   const t = Array.isArray(p.type) ? p.type.filter((x) => x !== "null")[0] : p.type;
@@ -162,7 +165,9 @@ function value(p, text) {
 }
 
 async function form() {
-  const params = (await schema()).filter((p) => !SKIP.has(p.name));
+  const params = (await schema())
+    .filter((p) => !SKIP.has(p.name))
+    .sort((a, b) => rank(a.name) - rank(b.name) || a.name.localeCompare(b.name));
   $("#params").innerHTML = params.map((p) => {
     const k = kind(p);
     const def = p.default === undefined || p.default === null ? "" : Array.isArray(p.default) ? p.default.join(", ") : String(p.default);

@@ -20,7 +20,8 @@ export class KnotView {
     const light = new DirectionalLight(0xffffff, 1.6);
     light.position.set(1, 2, 3);
     this.scene.add(light);
-    this.material = new MeshStandardMaterial({ color: 0x2e7dd7, roughness: 0.45, metalness: 0.05 });
+    // Slightly translucent, so that the contact beads between touching strands show.
+    this.material = new MeshStandardMaterial({ color: 0x2e7dd7, roughness: 0.45, metalness: 0.05, transparent: true, opacity: 0.75 });
     this.mesh = null;
     this.marks = null;
     this.home = null;
@@ -54,7 +55,7 @@ export class KnotView {
     }
     if (contacts.length) {
       const largest = Math.max(...contacts.map((c) => c.force)) || 1;
-      const bead = new SphereGeometry(this.radius * 0.6, 12, 8);
+      const bead = new SphereGeometry(this.radius * 0.8, 12, 8);
       this.marks = new InstancedMesh(bead, new MeshBasicMaterial(), contacts.length);
       const m = new Matrix4();
       contacts.forEach((c, i) => {
@@ -72,15 +73,17 @@ export class KnotView {
     this.mesh = new Mesh(geometry, this.material);
     this.scene.add(this.mesh);
     if (!this.home) {
-      const c = new Vector3();
-      v.forEach((p) => c.add(p));
-      c.divideScalar(v.length);
-      // Frame the knot: the points within the central third of the rod.
-      const core = v.slice(Math.floor(v.length / 3), Math.ceil((2 * v.length) / 3));
+      // Frame the knot: the points farther than a few radii from the line
+      // joining the clamped ends (the straight tails are not).
+      const first = v[0];
+      const axis = v[v.length - 1].clone().sub(first).normalize();
+      const off = (p) => p.clone().sub(first).sub(axis.clone().multiplyScalar(p.clone().sub(first).dot(axis))).length();
+      let core = v.filter((p) => off(p) > 3 * this.radius);
+      if (core.length < 2) core = v;
       const box = new Box3().setFromPoints(core);
       const size = box.getSize(new Vector3()).length() || 0.1;
       const target = box.getCenter(new Vector3());
-      this.home = { target, position: target.clone().add(new Vector3(0, -1.6 * size, 0.6 * size)) };
+      this.home = { target, position: target.clone().add(new Vector3(0, -1.5 * size, 0.5 * size)) };
       this.reset();
     }
     this.render();

@@ -273,7 +273,7 @@ pub fn run(args: Args) -> Result<()> {
     ] {
         let curves: Vec<CaseCurve> = ["n1", "n2", "n3", "n4"]
             .into_iter()
-            .filter_map(|key| get(key))
+            .filter_map(&get)
             .map(|(j, r)| CaseCurve {
                 label: format!("n = {}", j.params.n),
                 series: &r.series,

@@ -350,11 +350,14 @@ pub fn run_observed(
                 let mut stored: Vec<f64> = Vec::new();
                 let mut offset = SNAP_WINDOW;
                 while offset >= -SNAP_WINDOW {
-                    let label = match offset {
-                        o if o == 0.0 => "at_inversion",
-                        o if o == SNAP_FRAME_SPACING => "before_inversion",
-                        o if o > 0.0 => "near_inversion",
-                        _ => "after_inversion",
+                    let label = if offset == 0.0 {
+                        "at_inversion"
+                    } else if offset == SNAP_FRAME_SPACING {
+                        "before_inversion"
+                    } else if offset > 0.0 {
+                        "near_inversion"
+                    } else {
+                        "after_inversion"
                     };
                     let nearest = history
                         .iter()

@@ -294,3 +294,27 @@ async fn sweeps_are_listed_a_page_at_a_time() {
     }
     server.shutdown().await.unwrap();
 }
+
+/// Defect 9: a finished case shows no stale progress, and a finished sweep no ETA.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn finished_cases_carry_no_stale_progress_and_done_sweeps_no_eta() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    // Long enough for heartbeats (every 0.67 s) to store progress while it runs.
+    let id = submit_sweep(&c, &url, &json!({"base": long_base()})).await;
+    let running = wait_sweep(&c, &url, id, Duration::from_secs(60), |s| {
+        s["cases"][0]["progress_detail"].is_object()
+    })
+    .await;
+    assert!(running["cases"][0]["progress"].as_f64().unwrap() < 1.0);
+    let done = wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
+    assert!(done["eta_seconds"].is_null(), "{done:#}");
+    for case in done["cases"].as_array().unwrap() {
+        assert_eq!(case["progress"], 1.0, "{case:#}");
+        assert!(case["progress_detail"].is_null(), "stale progress: {case:#}");
+        let (_, detail) = get(&c, &format!("{url}/api/cases/{}", case["case_id"])).await;
+        assert!(detail["progress_detail"].is_null(), "{detail:#}");
+    }
+    server.shutdown().await.unwrap();
+}

@@ -455,7 +455,12 @@ impl Core {
     }
 }
 
+/// The solver's progress of a running case; none once it has stopped running
+/// (a finished case's last heartbeat is not its progress).
 fn progress_of(c: &CaseRecord) -> Option<CaseProgress> {
+    if c.state != CaseState::Running {
+        return None;
+    }
     c.progress_detail.map(|p| CaseProgress {
         fraction: p.fraction,
         l_k_bar: p.l_k_bar,

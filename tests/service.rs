@@ -105,6 +105,17 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     assert_eq!(diagram["base"]["youngs_modulus"], 1.8e6, "defaults filled in");
     let points = diagram["points"].as_array().unwrap();
     assert_eq!(points.len(), 4);
+    // The simplified model's reference: scale-free, so at h = 5 mm it is the
+    // n = 3 snap computed at the paper's 1.6 mm.
+    let (row, _) = solver::simplified::reproduce::sweep_row(solver::simplified::Params::default()).unwrap();
+    let at_paper_h = row.snap_l_k_bar.unwrap();
+    for p in points {
+        let got = p["simplified_l_k_bar"].as_f64().unwrap();
+        assert!(
+            (got - at_paper_h).abs() < 1e-6 * at_paper_h,
+            "{got} vs {at_paper_h}"
+        );
+    }
     for p in points {
         assert!(
             p.get("inversion").is_some() && p["inversion"].is_null(),

@@ -14,8 +14,9 @@ use knotsweep_worker::store::{
 use serde_json::Value;
 use solver::measurements::Sample;
 use std::collections::BTreeMap;
+use std::collections::HashMap;
 use std::fmt::Write;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// Status words of cases, in the order metrics list them.
@@ -38,6 +39,8 @@ pub struct Core {
     limits: Limits,
     pool: Option<PoolHandle>,
     started: Instant,
+    /// The simplified model's snap by (n, h bits): computed once (about 0.4 s each).
+    simplified: Arc<Mutex<HashMap<(u32, u64), Option<f64>>>>,
 }
 
 impl Core {
@@ -47,6 +50,7 @@ impl Core {
             limits,
             pool,
             started: Instant::now(),
+            simplified: Arc::default(),
         }
     }
 
@@ -231,18 +235,50 @@ impl Core {
             base,
             solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
             physics_revision: solver::case::PHYSICS_REVISION,
-            points: d
-                .cases
-                .into_iter()
-                .map(|c| PhasePoint {
-                    case_id: c.case_id,
-                    params: c.params,
-                    status: c.status,
-                    inversion: c.inversion,
-                    reason: c.reason,
-                })
-                .collect(),
+            points: futures_util::future::join_all(d.cases.into_iter().zip(&cases).map(
+                |(c, full)| async move {
+                    PhasePoint {
+                        case_id: c.case_id,
+                        params: c.params,
+                        status: c.status,
+                        inversion: c.inversion,
+                        reason: c.reason,
+                        simplified_l_k_bar: self
+                            .simplified_snap(full.case.params.n, full.case.params.h)
+                            .await,
+                    }
+                },
+            ))
+            .await,
         })
+    }
+
+    /// The simplified model's snap-through l_k bar (paper Sec. 5, Figs 14 and
+    /// 15: epsilon = 0.7, phi = pi/3, no contact or friction) for `n` passes and
+    /// radius `h`; `None` where it has no snap (n = 1) or fails.
+    async fn simplified_snap(&self, n: u32, h: f64) -> Option<f64> {
+        let key = (n, h.to_bits());
+        if let Some(v) = self.simplified.lock().expect("simplified cache").get(&key) {
+            return *v;
+        }
+        let params = solver::simplified::Params {
+            n,
+            radius: h,
+            ..Default::default()
+        };
+        let snap = tokio::task::spawn_blocking(move || solver::simplified::reproduce::sweep_row(params))
+            .await
+            .ok()
+            .and_then(|r| {
+                r.map_err(|e| tracing::warn!(n, h, error = %e, "simplified model failed"))
+                    .ok()
+            })
+            .and_then(|(row, _)| row.snap_l_k_bar);
+        self.simplified
+            .lock()
+            .expect("simplified cache")
+            .insert(key, snap);
+        snap
     }
 
     async fn case_record(&self, id: i64) -> Result<CaseRecord, CoreError> {

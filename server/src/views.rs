@@ -153,6 +153,10 @@ pub struct PhasePoint {
     /// Null when there is an inversion; otherwise why not: no inversion before
     /// the stop condition, the solver's reason for failing, not computed yet, ...
     pub reason: Option<String>,
+    /// The simplified model's snap-through l_k bar at this case's n and h
+    /// (paper Sec. 5, Figs 14 and 15: epsilon = 0.7, phi = pi/3, no contact or
+    /// friction); null where the model has no snap (n = 1).
+    pub simplified_l_k_bar: Option<f64>,
 }
 
 /// The phase diagram of a sweep: for each case its varied parameters, status

@@ -104,11 +104,16 @@ async function refresh(state) {
   if (axisName) {
     const scale = axisName === "h" ? 1e3 : 1;
     const points = pd.points.filter((p) => p.inversion).map((p) => [Number(p.params[axisName]) * scale, p.inversion.l_k_bar]);
+    // The simplified model applies against n and h (the paper's Figs 14 and 15).
+    const reference = axisName === "n" || axisName === "h"
+      ? pd.points.filter((p) => p.simplified_l_k_bar !== null).map((p) => [Number(p.params[axisName]) * scale, p.simplified_l_k_bar])
+      : [];
     scatter($("#phase"), {
       title: `critical l_k bar against ${axisName}${axisName === "h" ? " (mm)" : ""}`,
       x: axisName === "h" ? "h (mm)" : axisName,
       y: "critical l_k bar",
       points,
+      reference,
     });
     const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
     $("#phase-note").textContent = none.length ? "Without an inversion: " + none.join("; ") : "";

@@ -40,8 +40,11 @@ pub struct Core {
     pool: Option<PoolHandle>,
     started: Instant,
     /// The simplified model's snap by (n, h bits): computed once (about 0.4 s each).
-    simplified: Arc<Mutex<HashMap<(u32, u64), Option<f64>>>>,
+    simplified: Arc<Mutex<SimplifiedSnaps>>,
 }
+
+/// The simplified model's snaps computed so far, by (n, bits of h).
+type SimplifiedSnaps = HashMap<(u32, u64), Option<f64>>;
 
 impl Core {
     pub fn new(store: Arc<dyn Store>, limits: Limits, pool: Option<PoolHandle>) -> Self {

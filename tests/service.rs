@@ -186,6 +186,12 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         "{}",
         &svg[..200.min(svg.len())]
     );
+    let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/phase.svg")).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(
+        svg.contains("critical l_k bar") && !svg.contains("simplified model"),
+        "mu axis: no reference line"
+    );
     let (status, _) = get(&c, &format!("{url}/api/cases/{case_id}/figures/k_bar.svg")).await;
     assert_eq!(status, StatusCode::NOT_FOUND);
 

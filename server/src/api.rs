@@ -584,14 +584,21 @@ async fn case_figure(
     Ok(svg(app.core.case_figure(id, quantity).await?))
 }
 
-/// F bar or H bar against l_k bar of every finished case of a sweep, overlaid, as SVG.
+/// F bar or H bar against l_k bar of every finished case of a sweep, overlaid,
+/// or the phase diagram with the simplified model's line, as SVG.
 #[utoipa::path(get, path = "/api/sweeps/{id}/figures/{figure}", tag = "sweeps",
-    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg or h_bar.svg")),
+    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg, h_bar.svg or phase.svg")),
     responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
 async fn sweep_figure(
     State(app): State<App>,
     Path((id, figure)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
+    if figure == "phase.svg" {
+        let id = id
+            .parse()
+            .map_err(|_| ApiError::bad_request("id", format!("must be an integer, got {id:?}")))?;
+        return Ok(svg(app.core.phase_figure(id).await?));
+    }
     let (id, quantity) = figure_path(&id, &figure)?;
     Ok(svg(app.core.sweep_figure(id, quantity).await?))
 }

@@ -256,6 +256,44 @@ impl Core {
         })
     }
 
+    /// The phase diagram as SVG: critical l_k bar against the first varied
+    /// parameter (h in mm), the simplified model's line against n or h.
+    pub async fn phase_figure(&self, id: i64) -> Result<String, CoreError> {
+        let pd = self.phase_diagram(id).await?;
+        let Some(axis) = pd.varied.first() else {
+            return Err(CoreError::NotFound(format!(
+                "a varied parameter in sweep {id} (a single case has no phase diagram)"
+            )));
+        };
+        let scale = if axis == "h" { 1e3 } else { 1.0 };
+        let x = |p: &PhasePoint| p.params.get(axis).and_then(Value::as_f64).map(|v| v * scale);
+        let points: Vec<(f64, f64)> = pd
+            .points
+            .iter()
+            .filter_map(|p| Some((x(p)?, p.inversion.as_ref()?.l_k_bar)))
+            .collect();
+        let simplified: Vec<(f64, f64)> = if axis == "n" || axis == "h" {
+            pd.points
+                .iter()
+                .filter_map(|p| Some((x(p)?, p.simplified_l_k_bar?)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let x_label = if axis == "h" {
+            "h (mm)".to_string()
+        } else {
+            axis.clone()
+        };
+        figures::phase_chart(
+            &format!("sweep {id}: critical l_k bar against {x_label}"),
+            &x_label,
+            &points,
+            &simplified,
+        )
+        .map_err(|e| CoreError::Figure(e.to_string()))
+    }
+
     /// The simplified model's snap-through l_k bar (paper Sec. 5, Figs 14 and
     /// 15: epsilon = 0.7, phi = pi/3, no contact or friction) for `n` passes and
     /// radius `h`; `None` where it has no snap (n = 1) or fails.

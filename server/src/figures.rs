@@ -141,3 +141,65 @@ pub fn line_chart(
     }
     Ok(svg)
 }
+
+/// A phase diagram (paper Figs 7, 9, 11, 14, 15): the full model's critical
+/// l_k bar as points against the varied parameter, and the simplified model's
+/// as a line where given.
+pub fn phase_chart(
+    title: &str,
+    x_label: &str,
+    points: &[(f64, f64)],
+    simplified: &[(f64, f64)],
+) -> Result<String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let all = points.iter().chain(simplified);
+        let (mut x0, mut x1, mut y0, mut y1) =
+            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        for &(x, y) in all {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+        if !x0.is_finite() {
+            (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+        }
+        let (xp, yp) = (0.05 * (x1 - x0).max(1e-9), 0.1 * (y1 - y0).max(1.0));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(64)
+            .build_cartesian_2d((x0 - xp)..(x1 + xp), (y0 - yp).max(0.0)..(y1 + yp))
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc("critical l_k bar")
+            .light_line_style(WHITE)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let blue = Palette99::pick(0).to_rgba();
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 5, blue.filled())))
+            .map_err(|e| anyhow!("{e}"))?
+            .label("full model (inversion)")
+            .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
+        if !simplified.is_empty() {
+            let red = Palette99::pick(1).to_rgba();
+            chart
+                .draw_series(LineSeries::new(simplified.iter().copied(), red.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?
+                .label("simplified model (Sec. 5)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(svg)
+}

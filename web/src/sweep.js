@@ -28,6 +28,7 @@ export async function sweepPage(main, id) {
       <button type="button" id="all-csv">all series (CSV)</button> ·
       <a href="/api/sweeps/${esc(id)}/figures/f_bar.svg" download="sweep-${esc(id)}-F_bar.svg">F bar figure (SVG)</a> ·
       <a href="/api/sweeps/${esc(id)}/figures/h_bar.svg" download="sweep-${esc(id)}-H_bar.svg">H bar figure (SVG)</a> ·
+      <a href="/api/sweeps/${esc(id)}/figures/phase.svg" download="sweep-${esc(id)}-phase.svg">phase diagram (SVG)</a> ·
       <a href="/api/sweeps/${esc(id)}">sweep (JSON)</a></p></section>`;
   const state = { id, seriesOf: new Map(), drawn: "" };
   $("#all-csv").onclick = () => allSeries(state);

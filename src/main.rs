@@ -6,6 +6,7 @@ mod reproduce;
 mod run;
 mod serve;
 mod simplified;
+mod simplified_doc;
 mod snapshots;
 mod sweep;
 mod validate;

@@ -5,7 +5,7 @@
 //! critical points and their stability (`landscape`, Fig. 13 a, b), and the
 //! critical points as functions of l̄_k with their two folds (`bifurcation`,
 //! Fig. 13 c; the lower fold is the snap-through of Figs. 14-15).
-//! `reproduce` runs the paper's cases and `svg` draws them.
+//! `reproduce` runs the paper's cases (their figures and document are drawn outside the solver: `knotsweep_server::figures::simplified`, `src/simplified_doc.rs`).
 //!
 //! Units: lengths in rod radii h, energies in EI/h (eq. 12). The reconstruction of
 //! the loop's boundary conditions (Fig. 12 is not in the text) is documented in
@@ -15,13 +15,12 @@ pub mod braid;
 pub mod landscape;
 pub mod loop_rod;
 pub mod reproduce;
-pub mod svg;
 
 pub use bifurcation::{Bifurcation, BifurcationSpec, BranchPoint, Fold, bifurcation};
 pub use braid::{Braid, Strand};
 pub use landscape::{CriticalPoint, Landscape, LandscapePoint, LandscapeSpec, landscape};
 pub use loop_rod::{EndTwist, LoopBoundary, LoopEquilibrium, LoopSolver};
-pub use reproduce::{Document, Figure, Reproduction, ReproductionSpec, reproduce};
+pub use reproduce::{Reproduction, ReproductionSpec, reproduce};
 
 use crate::material::Material;
 use crate::rod::RodError;

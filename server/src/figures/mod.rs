@@ -1,6 +1,8 @@
 //! Publication-style SVG figures (plotters' SVG backend, no fonts needed): the
 //! same F bar and H bar charts for `knotsweep run --plot`, the sweep API and
 //! the web page's downloads.
+pub mod simplified;
+
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use solver::measurements::Sample;

@@ -1,12 +1,12 @@
 //! SVG drawings of the simplified model (pure string building, no I/O): the
 //! braid-and-loop schematic, Ē(θ) and dĒ/dθ (Fig. 13 a, b), the critical curve
 //! (Fig. 13 c), the snap l̄_k against h and n (Figs. 14, 15) and convergence plots.
-use super::Params;
-use super::bifurcation::Bifurcation;
-use super::braid::{Braid, Strand};
-use super::landscape::Landscape;
-use super::loop_rod::LoopBoundary;
 use nalgebra::Vector3;
+use solver::simplified::Params;
+use solver::simplified::bifurcation::Bifurcation;
+use solver::simplified::braid::{Braid, Strand};
+use solver::simplified::landscape::Landscape;
+use solver::simplified::loop_rod::LoopBoundary;
 use std::fmt::Write;
 
 const BLUE: &str = "#1f77b4";
@@ -352,9 +352,10 @@ fn side_by_side(parts: &[String], w: f64, h: f64) -> String {
 /// Ē, Ē_b, Ē_l against theta and dĒ/dθ, with the critical points (filled:
 /// stable, open: unstable); paper Fig. 13 (a, b).
 pub fn landscape(l: &Landscape) -> String {
-    let pts =
-        |f: fn(&super::LandscapePoint) -> f64| l.points.iter().map(|p| (p.theta, f(p))).collect::<Vec<_>>();
-    let crit = |stable: bool, y: &dyn Fn(&super::CriticalPoint) -> f64| Series {
+    let pts = |f: fn(&solver::simplified::LandscapePoint) -> f64| {
+        l.points.iter().map(|p| (p.theta, f(p))).collect::<Vec<_>>()
+    };
+    let crit = |stable: bool, y: &dyn Fn(&solver::simplified::CriticalPoint) -> f64| Series {
         label: if stable {
             "stable".into()
         } else {

@@ -2,13 +2,13 @@
 //! (equal material frames, no relative rotation), relax with the ends held,
 //! then pull the clamps apart along the line joining them at a steady speed,
 //! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
-use crate::case::CaseParams;
+use crate::case::{CaseParams, StartShape};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::external::Environment;
 use crate::knot;
 use crate::material::Material;
 use crate::measurements::{self, Inversion, InversionCriteria, Sample};
-use crate::pipeline::{ContactOptions, World};
+use crate::pipeline::{ContactOptions, World, WorldStepReport};
 use crate::rod::{End, Rod};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
@@ -136,7 +136,9 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
 }
 
 /// [`run`] with the rod's centre line (node positions) handed to the
-/// observer with every sample's progress.
+/// observer with every sample's progress. The stages of paper Sec. 4: build
+/// the knot, relax it with the ends held, pull the clamps apart sampling
+/// eq. (11) until the stop condition, and report.
 pub fn run_observed(
     params: &CaseParams,
     observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
@@ -153,47 +155,66 @@ pub fn run_observed(
         frames: Vec::new(),
         stats: Stats::default(),
     };
-    let shape = match params.validated_start() {
-        Ok(s) => s,
-        Err(errors) => {
+    let (shape, world) = match build(params, &mut report) {
+        Ok(built) => built,
+        Err(reason) => {
             report.status = Status::Invalid;
-            report.reason = errors
-                .iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("; ");
+            report.reason = reason;
             return report;
         }
     };
+    let mut case = Case::new(params, report, world, started);
+    let ending = case.relax().and_then(|()| case.pull(shape.loop_middle, observer));
+    case.finish(ending.err().unwrap_or(Ending {
+        status: Status::Completed,
+        reason: String::new(),
+    }))
+}
+
+/// Why a case stopped before the end of its pull.
+struct Ending {
+    status: Status,
+    reason: String,
+}
+
+impl Ending {
+    fn new(status: Status, reason: impl Into<String>) -> Self {
+        Self {
+            status,
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Stage 1, the knot: the start shape (built or the user's) with its knot
+/// type checked, and the world holding it as a clamped DER rod with the
+/// case's contact, friction and time-stepping options.
+fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, World), String> {
+    let shape = params.validated_start().map_err(|errors| {
+        errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("; ")
+    })?;
     let expected = knot::expected_determinant(params.n);
     report.determinant_initial = knot::knot_determinant(&shape.points).ok();
     if report.determinant_initial != Some(expected) {
-        report.status = Status::Invalid;
-        report.reason = format!(
+        return Err(format!(
             "the start shape has knot determinant {}, expected {expected}",
             determinant_text(report.determinant_initial)
-        );
-        return report;
+        ));
     }
     let material = Material {
         youngs_modulus: params.youngs_modulus,
         poisson_ratio: params.poisson_ratio,
         density: params.density,
     };
-    let mut rod = match Rod::new(&shape.points, params.h, material) {
-        Ok(r) => r,
-        Err(e) => {
-            report.status = Status::Invalid;
-            report.reason = format!("rod: {e}");
-            return report;
-        }
-    };
+    let mut rod = Rod::new(&shape.points, params.h, material).map_err(|e| format!("rod: {e}"))?;
     rod.clamp(End::Start);
     rod.clamp(End::Finish);
-    let ei = params.bending_stiffness();
-    let force_unit = ei / (params.h * params.h);
     let newton = NewtonOptions {
-        force_scale: Some(force_unit),
+        force_scale: Some(force_unit(params)),
         ..NewtonOptions::default()
     };
     let defaults = ContactOptions::default();
@@ -211,103 +232,227 @@ pub fn run_observed(
         gravity: Vector3::from(params.gravity),
         damping: RELAX_DAMPING,
     };
-    let mut world = World::new(vec![rod], env, contact, newton);
-    let dt = params.time_step();
-    let mut clock = TimeStep::new(if params.adaptive_dt {
-        AdaptiveOptions::up_to(dt)
-    } else {
-        AdaptiveOptions::fixed(dt)
-    });
-    let l_k_bar_of = |w: &World| l_k_bar(w, params);
+    Ok((shape, World::new(vec![rod], env, contact, newton)))
+}
 
-    // Relaxation with the ends held.
-    let mut grad = vec![0.0; world.rods[0].ndof()];
-    let mut relaxed_for = 0.0;
-    while relaxed_for < params.relax_time {
-        let step = match clock.advance(&mut world) {
-            Ok(s) => s,
-            Err(e) => {
-                let reason = format!("while relaxing: {e}");
-                return finish(report, world, &clock, Status::Diverged, reason, started);
+/// The force unit of F bar: EI / h^2 (eq. 11).
+fn force_unit(params: &CaseParams) -> f64 {
+    params.bending_stiffness() / (params.h * params.h)
+}
+
+/// A case being run: its world, clock and the report being filled.
+struct Case<'a> {
+    params: &'a CaseParams,
+    report: CaseReport,
+    world: World,
+    clock: TimeStep,
+    /// Knot determinant of an n-pass overhand knot (2n + 1).
+    expected: u64,
+    started: std::time::Instant,
+}
+
+/// What the pull keeps between samples.
+struct Pull {
+    /// Unit vector from the start clamp to the finish clamp.
+    axis: Vector3<f64>,
+    start_l_k_bar: f64,
+    next_sample: f64,
+    next_frame: f64,
+    /// After the inversion: the next dense frame and where the dense frames stop.
+    after_snap: Option<(f64, f64)>,
+    history: VecDeque<Frame>,
+    criteria: InversionCriteria,
+    /// The loop's middle node, from the builder and then tracked from each sample's braid ends.
+    mid: usize,
+    time: f64,
+    peak_kinetic_energy: f64,
+}
+
+impl<'a> Case<'a> {
+    fn new(params: &'a CaseParams, report: CaseReport, world: World, started: std::time::Instant) -> Self {
+        let dt = params.time_step();
+        let clock = TimeStep::new(if params.adaptive_dt {
+            AdaptiveOptions::up_to(dt)
+        } else {
+            AdaptiveOptions::fixed(dt)
+        });
+        Self {
+            params,
+            report,
+            world,
+            clock,
+            expected: knot::expected_determinant(params.n),
+            started,
+        }
+    }
+
+    fn l_k_bar(&self) -> f64 {
+        l_k_bar(&self.world, self.params)
+    }
+
+    /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h
+    /// (`during` says when; called only then).
+    fn penetration(&self, max_penetration: f64, during: impl FnOnce() -> String) -> Result<(), Ending> {
+        if max_penetration > MAX_PENETRATION * self.params.h {
+            return Err(Ending::new(
+                Status::Penetrated,
+                format!(
+                    "penetration {:.3} h exceeds {MAX_PENETRATION} h {}",
+                    max_penetration / self.params.h,
+                    during()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// An `Ending` when the knot type of `points` is not the case's (`when`
+    /// says where; called only then).
+    fn topology(&mut self, points: &[Vector3<f64>], when: impl FnOnce() -> String) -> Result<(), Ending> {
+        let det = knot::knot_determinant(points).ok();
+        self.determinant(det, when)
+    }
+
+    fn determinant(&mut self, det: Option<u64>, when: impl FnOnce() -> String) -> Result<(), Ending> {
+        if det != Some(self.expected) {
+            self.report.determinant_final = det;
+            return Err(Ending::new(
+                Status::TopologyChanged,
+                format!(
+                    "knot determinant {} {}, expected {}",
+                    determinant_text(det),
+                    when(),
+                    self.expected
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Stage 2: relaxation with the ends held (damped), until the kinetic
+    /// energy is a `relax_tolerance` fraction of the elastic energy or
+    /// `relax_time` has passed.
+    fn relax(&mut self) -> Result<(), Ending> {
+        let mut grad = vec![0.0; self.world.rods[0].ndof()];
+        let mut relaxed_for = 0.0;
+        while relaxed_for < self.params.relax_time {
+            let step = self
+                .clock
+                .advance(&mut self.world)
+                .map_err(|e| Ending::new(Status::Diverged, format!("while relaxing: {e}")))?;
+            relaxed_for += step.dt;
+            self.report.stats.relax_steps += 1;
+            self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
+            let rod = &self.world.rods[0];
+            let ke = rod.kinetic_energy();
+            let elastic =
+                crate::energies::evaluate(rod, crate::energies::Terms::ALL, &mut grad, None).total();
+            if ke <= self.params.relax_tolerance * elastic {
+                break;
             }
-        };
-        relaxed_for += step.dt;
-        report.stats.relax_steps += 1;
-        if step.report.max_penetration > MAX_PENETRATION * params.h {
-            let reason = format!(
-                "penetration {:.3} h exceeds {MAX_PENETRATION} h while relaxing",
-                step.report.max_penetration / params.h
-            );
-            return finish(report, world, &clock, Status::Penetrated, reason, started);
         }
-        let ke = world.rods[0].kinetic_energy();
-        let elastic =
-            crate::energies::evaluate(&world.rods[0], crate::energies::Terms::ALL, &mut grad, None).total();
-        if ke <= params.relax_tolerance * elastic {
-            break;
-        }
+        let points = self.world.rods[0].positions();
+        self.topology(&points, || "after relaxing".to_string())?;
+        let at = self.l_k_bar();
+        self.report.frames.push(frame(&self.world, "relaxed", at));
+        Ok(())
     }
-    let det = knot::knot_determinant(&world.rods[0].positions()).ok();
-    if det != Some(expected) {
-        report.determinant_final = det;
-        let reason = format!(
-            "knot determinant {} after relaxing, expected {expected}",
-            determinant_text(det)
-        );
-        return finish(report, world, &clock, Status::TopologyChanged, reason, started);
-    }
-    report.frames.push(frame(&world, "relaxed", l_k_bar_of(&world)));
 
-    // Pull both clamps apart along the line joining them.
-    let axis = {
-        let r = &world.rods[0];
-        (r.node(r.nodes() - 1) - r.node(0)).normalize()
-    };
-    world.env.damping = params.damping;
-    world.rods[0].move_clamp(End::Start, -axis * params.pull_speed);
-    world.rods[0].move_clamp(End::Finish, axis * params.pull_speed);
-    let start_l_k_bar = l_k_bar_of(&world);
-    let mut next_sample = start_l_k_bar;
-    let mut next_frame = start_l_k_bar - FRAME_SPACING;
-    // After the inversion: the next dense frame and where the dense frames stop.
-    let mut after_snap: Option<(f64, f64)> = None;
-    let mut history: VecDeque<Frame> = VecDeque::with_capacity(FRAME_HISTORY);
-    let criteria = InversionCriteria::default();
-    // The loop's middle node, from the builder and then tracked from each sample's braid ends.
-    let mut mid = shape.loop_middle;
-    let mut time = 0.0;
-    let mut peak_kinetic_energy: f64 = 0.0;
-    loop {
-        let (step, dt) = match clock.advance(&mut world) {
-            Ok(s) => (s.report, s.dt),
-            Err(e) => return finish(report, world, &clock, Status::Diverged, e.to_string(), started),
+    /// Stage 3: both clamps pulled apart along the line joining them; a
+    /// sample every `sample_interval` in l_k bar, until `min_l_k_bar`, the
+    /// margin after the inversion, or `max_force_bar`.
+    fn pull(
+        &mut self,
+        loop_middle: usize,
+        observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
+    ) -> Result<(), Ending> {
+        let axis = {
+            let r = &self.world.rods[0];
+            (r.node(r.nodes() - 1) - r.node(0)).normalize()
         };
-        time += dt;
-        peak_kinetic_energy = peak_kinetic_energy.max(world.rods[0].kinetic_energy());
-        report.stats.steps += 1;
-        report.stats.newton_iterations += u64::from(step.newton_iterations);
-        report.stats.contact_sweeps += step.contact_sweeps as u64;
-        if step.max_penetration > MAX_PENETRATION * params.h {
-            let reason = format!(
-                "penetration {:.3} h exceeds {MAX_PENETRATION} h at l_k bar {:.2}",
-                step.max_penetration / params.h,
-                l_k_bar_of(&world)
-            );
-            return finish(report, world, &clock, Status::Penetrated, reason, started);
+        self.world.env.damping = self.params.damping;
+        self.world.rods[0].move_clamp(End::Start, -axis * self.params.pull_speed);
+        self.world.rods[0].move_clamp(End::Finish, axis * self.params.pull_speed);
+        let start_l_k_bar = self.l_k_bar();
+        let mut pull = Pull {
+            axis,
+            start_l_k_bar,
+            next_sample: start_l_k_bar,
+            next_frame: start_l_k_bar - FRAME_SPACING,
+            after_snap: None,
+            history: VecDeque::with_capacity(FRAME_HISTORY),
+            criteria: InversionCriteria::default(),
+            mid: loop_middle,
+            time: 0.0,
+            peak_kinetic_energy: 0.0,
+        };
+        loop {
+            let (step, dt) = match self.clock.advance(&mut self.world) {
+                Ok(s) => (s.report, s.dt),
+                Err(e) => return Err(Ending::new(Status::Diverged, e.to_string())),
+            };
+            pull.time += dt;
+            pull.peak_kinetic_energy = pull.peak_kinetic_energy.max(self.world.rods[0].kinetic_energy());
+            let stats = &mut self.report.stats;
+            stats.steps += 1;
+            stats.newton_iterations += u64::from(step.newton_iterations);
+            stats.contact_sweeps += step.contact_sweeps as u64;
+            self.penetration(step.max_penetration, || {
+                format!("at l_k bar {:.2}", self.l_k_bar())
+            })?;
+            let l_k_bar = self.l_k_bar();
+            if l_k_bar > pull.next_sample {
+                continue;
+            }
+            pull.next_sample = l_k_bar - self.params.sample_interval;
+            let points = self.sample(&mut pull, &step, dt, l_k_bar);
+            self.keep_frames(&mut pull, l_k_bar);
+            self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
+            let stop_l = match (self.report.inversion, self.params.stop_after_inversion) {
+                (Some(inv), Some(margin)) => (inv.l_k_bar - margin).max(self.params.min_l_k_bar),
+                _ => self.params.min_l_k_bar,
+            };
+            let sample = self.report.series.last().copied().unwrap_or_default();
+            let progress = Progress {
+                fraction: ((pull.start_l_k_bar - l_k_bar) / (pull.start_l_k_bar - stop_l)).clamp(0.0, 1.0),
+                l_k_bar,
+                h_bar: sample.h_bar,
+                steps: self.report.stats.steps,
+            };
+            if !observer(&progress, &points) {
+                return Err(Ending::new(Status::Cancelled, "cancelled"));
+            }
+            let tight = self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
+            if l_k_bar <= stop_l || tight {
+                break;
+            }
         }
-        let l_k_bar = l_k_bar_of(&world);
-        if l_k_bar > next_sample {
-            continue;
-        }
-        next_sample = l_k_bar - params.sample_interval;
-        let rod = &world.rods[0];
-        let stepper = world.stepper(0);
-        let f_start = -stepper.clamp_reaction(rod, End::Start).0.dot(&axis);
-        let f_finish = stepper.clamp_reaction(rod, End::Finish).0.dot(&axis);
+        let det = knot::knot_determinant(&self.world.rods[0].positions()).ok();
+        self.report.determinant_final = det;
+        self.determinant(det, || "at the end".to_string())?;
+        let at = self.l_k_bar();
+        self.report.frames.push(frame(&self.world, "final", at));
+        Ok(())
+    }
+
+    /// One sample of eq. (11) and the braid's shape; detects the inversion.
+    /// Returns the rod's node positions.
+    fn sample(
+        &mut self,
+        pull: &mut Pull,
+        step: &WorldStepReport,
+        dt: f64,
+        l_k_bar: f64,
+    ) -> Vec<Vector3<f64>> {
+        let params = self.params;
+        let rod = &self.world.rods[0];
+        let stepper = self.world.stepper(0);
+        let f_start = -stepper.clamp_reaction(rod, End::Start).0.dot(&pull.axis);
+        let f_finish = stepper.clamp_reaction(rod, End::Finish).0.dot(&pull.axis);
         let force = 0.5 * (f_start + f_finish);
         let points = rod.positions();
-        let pairs = world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
-        let braid = measurements::braid(pairs, mid);
+        let pairs = self.world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
+        let braid = measurements::braid(pairs, pull.mid);
         let geometry = braid.map(|b| {
             let (p, q) = b.loop_ends();
             (
@@ -318,18 +463,18 @@ pub fn run_observed(
         let (width, height) = geometry.map_or((0.0, 0.0), |(g, _)| (g.width, g.height));
         let (epsilon, phi) = geometry.map_or((0.0, 0.0), |(_, b)| (b.epsilon, b.phi));
         if let Some((g, _)) = geometry {
-            mid = (g.start + g.end) / 2;
+            pull.mid = (g.start + g.end) / 2;
         }
-        report.series.push(Sample {
-            time,
+        self.report.series.push(Sample {
+            time: pull.time,
             l_k_bar,
             l_c_over_l: 1.0 - l_k_bar * params.h / params.length,
             force,
-            f_bar: force / force_unit,
+            f_bar: force / force_unit(params),
             width,
             height,
             h_bar: if width > 0.0 { height / width } else { 0.0 },
-            kinetic_energy: std::mem::take(&mut peak_kinetic_energy),
+            kinetic_energy: std::mem::take(&mut pull.peak_kinetic_energy),
             contacts: step.contacts,
             active_contacts: step.active_contacts,
             max_penetration_over_h: step.max_penetration / params.h,
@@ -338,110 +483,82 @@ pub fn run_observed(
             newton_iterations: step.newton_iterations,
             dt,
         });
-        if history.len() == FRAME_HISTORY {
-            history.pop_front();
+        points
+    }
+
+    /// The frames a viewer steps through (`FRAME_SPACING` along the pull,
+    /// `SNAP_FRAME_SPACING` around the inversion); detects the inversion.
+    fn keep_frames(&mut self, pull: &mut Pull, l_k_bar: f64) {
+        if pull.history.len() == FRAME_HISTORY {
+            pull.history.pop_front();
         }
-        history.push_back(frame(&world, "sample", l_k_bar));
-        if report.inversion.is_none() {
-            report.inversion = measurements::detect_inversion(&report.series, &criteria);
-            if let Some(inv) = &report.inversion {
-                let snap = inv.l_k_bar;
-                // The detection lags the snap: the frames on both sides are in the history.
-                let mut stored: Vec<f64> = Vec::new();
-                let mut offset = SNAP_WINDOW;
-                while offset >= -SNAP_WINDOW {
-                    let label = if offset == 0.0 {
-                        "at_inversion"
-                    } else if offset == SNAP_FRAME_SPACING {
-                        "before_inversion"
-                    } else if offset > 0.0 {
-                        "near_inversion"
-                    } else {
-                        "after_inversion"
-                    };
-                    let nearest = history
-                        .iter()
-                        .filter(|f| offset > 0.0 || f.l_k_bar <= snap)
-                        .min_by(|a, b| {
-                            (a.l_k_bar - snap - offset)
-                                .abs()
-                                .total_cmp(&(b.l_k_bar - snap - offset).abs())
-                        });
-                    if let Some(f) =
-                        nearest.filter(|f| (f.l_k_bar - snap - offset).abs() < SNAP_FRAME_SPACING / 2.0)
-                    {
-                        if !stored.contains(&f.l_k_bar) {
-                            stored.push(f.l_k_bar);
-                            report.frames.push(Frame {
-                                label: label.to_string(),
-                                ..f.clone()
-                            });
-                        }
-                    }
-                    offset -= SNAP_FRAME_SPACING;
-                }
-                let lowest = stored.iter().copied().fold(snap, f64::min);
-                after_snap = Some((lowest - SNAP_FRAME_SPACING, snap - SNAP_WINDOW));
+        pull.history.push_back(frame(&self.world, "sample", l_k_bar));
+        if self.report.inversion.is_none() {
+            self.report.inversion = measurements::detect_inversion(&self.report.series, &pull.criteria);
+            if let Some(inv) = self.report.inversion {
+                self.snap_frames(pull, inv.l_k_bar);
             }
-        } else if let Some((next, end)) = after_snap {
+        } else if let Some((next, end)) = pull.after_snap {
             if l_k_bar <= next && l_k_bar >= end {
-                report.frames.push(frame(&world, "after_inversion", l_k_bar));
-                after_snap = Some((l_k_bar - SNAP_FRAME_SPACING, end));
+                self.report
+                    .frames
+                    .push(frame(&self.world, "after_inversion", l_k_bar));
+                pull.after_snap = Some((l_k_bar - SNAP_FRAME_SPACING, end));
             }
         }
-        if l_k_bar <= next_frame {
-            report.frames.push(frame(&world, "pull", l_k_bar));
-            next_frame = l_k_bar - FRAME_SPACING;
-        }
-        let det = knot::knot_determinant(&points).ok();
-        if det != Some(expected) {
-            report.determinant_final = det;
-            let reason = format!(
-                "knot determinant {} at l_k bar {l_k_bar:.2}, expected {expected}",
-                determinant_text(det)
-            );
-            return finish(report, world, &clock, Status::TopologyChanged, reason, started);
-        }
-        let stop_l = match (report.inversion, params.stop_after_inversion) {
-            (Some(inv), Some(margin)) => (inv.l_k_bar - margin).max(params.min_l_k_bar),
-            _ => params.min_l_k_bar,
-        };
-        let sample = report.series.last().copied().unwrap_or_default();
-        let fraction = ((start_l_k_bar - l_k_bar) / (start_l_k_bar - stop_l)).clamp(0.0, 1.0);
-        let progress = Progress {
-            fraction,
-            l_k_bar,
-            h_bar: sample.h_bar,
-            steps: report.stats.steps,
-        };
-        let keep_going = observer(&progress, &points);
-        if !keep_going {
-            return finish(
-                report,
-                world,
-                &clock,
-                Status::Cancelled,
-                "cancelled".to_string(),
-                started,
-            );
-        }
-        let tight = params.max_force_bar.is_some_and(|m| sample.f_bar > m);
-        if l_k_bar <= stop_l || tight {
-            break;
+        if l_k_bar <= pull.next_frame {
+            self.report.frames.push(frame(&self.world, "pull", l_k_bar));
+            pull.next_frame = l_k_bar - FRAME_SPACING;
         }
     }
-    let det = knot::knot_determinant(&world.rods[0].positions()).ok();
-    report.determinant_final = det;
-    if det != Some(expected) {
-        let reason = format!(
-            "knot determinant {} at the end, expected {expected}",
-            determinant_text(det)
-        );
-        return finish(report, world, &clock, Status::TopologyChanged, reason, started);
+
+    /// The frames either side of the inversion at `snap`, taken from the
+    /// history (the detection lags the snap).
+    fn snap_frames(&mut self, pull: &mut Pull, snap: f64) {
+        let mut stored: Vec<f64> = Vec::new();
+        let mut offset = SNAP_WINDOW;
+        while offset >= -SNAP_WINDOW {
+            let label = if offset == 0.0 {
+                "at_inversion"
+            } else if offset == SNAP_FRAME_SPACING {
+                "before_inversion"
+            } else if offset > 0.0 {
+                "near_inversion"
+            } else {
+                "after_inversion"
+            };
+            let distance = |f: &Frame| (f.l_k_bar - snap - offset).abs();
+            let nearest = pull
+                .history
+                .iter()
+                .filter(|f| offset > 0.0 || f.l_k_bar <= snap)
+                .min_by(|a, b| distance(a).total_cmp(&distance(b)));
+            if let Some(f) = nearest.filter(|f| distance(f) < SNAP_FRAME_SPACING / 2.0) {
+                if !stored.contains(&f.l_k_bar) {
+                    stored.push(f.l_k_bar);
+                    self.report.frames.push(Frame {
+                        label: label.to_string(),
+                        ..f.clone()
+                    });
+                }
+            }
+            offset -= SNAP_FRAME_SPACING;
+        }
+        let lowest = stored.iter().copied().fold(snap, f64::min);
+        pull.after_snap = Some((lowest - SNAP_FRAME_SPACING, snap - SNAP_WINDOW));
     }
-    let l_end = l_k_bar_of(&world);
-    report.frames.push(frame(&world, "final", l_end));
-    finish(report, world, &clock, Status::Completed, String::new(), started)
+
+    /// Stage 4: the report, with the ending's status and the run's statistics.
+    fn finish(self, ending: Ending) -> CaseReport {
+        finish(
+            self.report,
+            self.world,
+            &self.clock,
+            ending.status,
+            ending.reason,
+            self.started,
+        )
+    }
 }
 
 /// A knot determinant as users read it.

@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::views::SweepStatus;
 use knotsweep_server::{Core, Limits};
-use knotsweep_worker::store::SweepAction;
+use knotsweep_worker::store::{CaseState, SweepAction, SweepState};
 use knotsweep_worker::{PoolConfig, WorkerPool};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -95,19 +95,26 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!(describe(e)))?;
         let mut id = submitted.sweep.summary.id;
         if submitted.replayed {
-            match submitted.sweep.summary.state.as_str() {
-                "cancelled" => {
-                    eprintln!("sweep {id} of this specification was cancelled: starting a new one (results are reused)");
-                    submitted = core.submit(spec, &raw, None).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
-                    id = submitted.sweep.summary.id;
-                }
-                "paused" => {
-                    core.control(id, SweepAction::Resume).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
-                }
-                _ => {}
+            let state = submitted.sweep.summary.state.clone();
+            if state == SweepState::Cancelled.as_str() {
+                eprintln!(
+                    "sweep {id} of this specification was cancelled: starting a new one (results are reused)"
+                );
+                submitted = core
+                    .submit(spec, &raw, None)
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
+                id = submitted.sweep.summary.id;
+            } else if state == SweepState::Paused.as_str() {
+                core.control(id, SweepAction::Resume)
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
             }
             let done = submitted.sweep.cases.iter().filter(|c| c.progress >= 1.0).count();
-            eprintln!("resuming sweep {id}: {done} of {} cases finished", submitted.sweep.cases.len());
+            eprintln!(
+                "resuming sweep {id}: {done} of {} cases finished",
+                submitted.sweep.cases.len()
+            );
         } else {
             eprintln!(
                 "sweep {id}: {} cases ({} reused from earlier results), database {}",
@@ -122,16 +129,28 @@ pub fn run(args: Args) -> Result<()> {
         config.poll = Duration::from_millis(100);
         let pool = WorkerPool::start(store.clone(), config);
         let bar = ProgressBar::new(total * 100).with_style(
-            ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} {msg}").expect("valid template"),
+            ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} {msg}")
+                .expect("valid template"),
         );
         let signal = crate::worker::shutdown_signal();
         tokio::pin!(signal);
         let finished = loop {
             let detail = core.sweep(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
             bar.set_position((detail.progress * total as f64 * 100.0) as u64);
-            let finished = detail.cases.iter().filter(|c| c.progress >= 1.0 || c.status == "failed").count();
-            let running = detail.summary.counts.get("running").copied().unwrap_or(0);
-            let eta = detail.eta_seconds.map_or("?".to_string(), |s| format!("{s:.0} s"));
+            let finished = detail
+                .cases
+                .iter()
+                .filter(|c| c.progress >= 1.0 || c.status == "failed")
+                .count();
+            let running = detail
+                .summary
+                .counts
+                .get(CaseState::Running.as_str())
+                .copied()
+                .unwrap_or(0);
+            let eta = detail
+                .eta_seconds
+                .map_or("?".to_string(), |s| format!("{s:.0} s"));
             bar.set_message(format!("{finished}/{total} cases, {running} running, eta {eta}"));
             if matches!(detail.summary.status, SweepStatus::Done | SweepStatus::Cancelled) {
                 break true;
@@ -147,7 +166,10 @@ pub fn run(args: Args) -> Result<()> {
             store.close().await;
             bail!("interrupted: run the same command again to resume sweep {id}");
         }
-        let diagram = core.phase_diagram(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+        let diagram = core
+            .phase_diagram(id)
+            .await
+            .map_err(|e| anyhow::anyhow!(describe(e)))?;
         std::fs::write(&out, serde_json::to_string_pretty(&diagram)?)
             .with_context(|| format!("writing {}", out.display()))?;
         for p in &diagram.points {

@@ -13,24 +13,27 @@ use knotsweep_worker::store::{
 };
 use serde_json::Value;
 use solver::measurements::Sample;
+use solver::protocol::Status;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::fmt::Write;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// Status words of cases, in the order metrics list them.
-pub const STATUS_WORDS: [&str; 9] = [
-    "queued",
-    "running",
-    "completed",
-    "invalid",
-    "diverged",
-    "penetrated",
-    "topology_changed",
-    "failed",
-    "cancelled",
-];
+/// Status words of cases, in the order metrics list them: the queue states
+/// before a result, the solver's outcomes, then the queue's failures.
+pub fn status_words() -> Vec<String> {
+    let queue = |s: CaseState| s.as_str().to_string();
+    let outcomes = Status::ALL
+        .into_iter()
+        .filter(|s| *s != Status::Cancelled)
+        .map(|s| s.to_string());
+    [queue(CaseState::Queued), queue(CaseState::Running)]
+        .into_iter()
+        .chain(outcomes)
+        .chain([queue(CaseState::Failed), queue(CaseState::Cancelled)])
+        .collect()
+}
 
 /// The service's operations.
 #[derive(Clone)]
@@ -490,11 +493,11 @@ impl Core {
             out,
             "# HELP knotsweep_cases Cases by status.\n# TYPE knotsweep_cases gauge"
         );
-        for word in STATUS_WORDS {
+        for word in status_words() {
             let _ = writeln!(
                 out,
                 "knotsweep_cases{{status=\"{word}\"}} {}",
-                counts.get(word).copied().unwrap_or(0)
+                counts.get(&word).copied().unwrap_or(0)
             );
         }
         let _ = writeln!(
@@ -560,7 +563,10 @@ fn links(id: i64) -> BTreeMap<String, String> {
 
 fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
     let open = |w: &str| counts.get(w).copied().unwrap_or(0);
-    let (queued, running) = (open("queued"), open("running"));
+    let (queued, running) = (
+        open(CaseState::Queued.as_str()),
+        open(CaseState::Running.as_str()),
+    );
     match state {
         SweepState::Cancelled => SweepStatus::Cancelled,
         _ if queued + running == 0 => SweepStatus::Done,
@@ -600,7 +606,7 @@ fn reason_of(c: &CaseRecord) -> Option<String> {
         }),
         (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
         (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
-        (None, CaseState::Cancelled) => Some("cancelled".to_string()),
+        (None, CaseState::Cancelled) => Some(CaseState::Cancelled.as_str().to_string()),
         (None, CaseState::Queued) => Some(match &c.last_error {
             Some(e) => format!("not computed yet (queued; last attempt: {e})"),
             None => "not computed yet (queued)".to_string(),

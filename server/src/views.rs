@@ -288,7 +288,7 @@ impl From<&SweepDetail> for SweepEvent {
             running: d
                 .cases
                 .iter()
-                .filter(|c| c.status == "running")
+                .filter(|c| c.status == knotsweep_worker::store::CaseState::Running.as_str())
                 .map(|c| RunningCase {
                     case_id: c.case_id,
                     progress: c.progress,

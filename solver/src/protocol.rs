@@ -34,17 +34,23 @@ pub enum Status {
     Cancelled,
 }
 
+impl Status {
+    /// Every solver status, in the order reports list them.
+    pub const ALL: [Status; 6] = [
+        Status::Completed,
+        Status::Invalid,
+        Status::Diverged,
+        Status::Penetrated,
+        Status::TopologyChanged,
+        Status::Cancelled,
+    ];
+}
+
 impl std::fmt::Display for Status {
     /// The status word of the reports and the API (the serde names).
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str(match self {
-            Status::Completed => "completed",
-            Status::Invalid => "invalid",
-            Status::Diverged => "diverged",
-            Status::Penetrated => "penetrated",
-            Status::TopologyChanged => "topology_changed",
-            Status::Cancelled => "cancelled",
-        })
+        let word = serde_json::to_value(self).map_err(|_| std::fmt::Error)?;
+        f.write_str(word.as_str().ok_or(std::fmt::Error)?)
     }
 }
 
@@ -420,7 +426,7 @@ impl<'a> Case<'a> {
                 steps: self.report.stats.steps,
             };
             if !observer(&progress, &points) {
-                return Err(Ending::new(Status::Cancelled, "cancelled"));
+                return Err(Ending::new(Status::Cancelled, Status::Cancelled.to_string()));
             }
             let tight = self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
             if l_k_bar <= stop_l || tight {

@@ -746,7 +746,7 @@ impl Store for PgStore {
         .fetch_optional(&mut *tx)
         .await?;
         if let Some(status) = &status {
-            let message = if status == "cancelled" {
+            let message = if status == CaseState::Cancelled.as_str() {
                 format!("cancelled while running on {}", lease.owner)
             } else {
                 notify(&mut *tx).await?;

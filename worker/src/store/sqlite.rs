@@ -694,7 +694,7 @@ impl Store for SqliteStore {
         .fetch_optional(&mut *tx)
         .await?;
         if let Some(status) = &status {
-            let message = if status == "cancelled" {
+            let message = if status == CaseState::Cancelled.as_str() {
                 format!("cancelled while running on {}", lease.owner)
             } else {
                 "stopped for a cancellation that was withdrawn; queued again".to_string()

@@ -3,120 +3,99 @@
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::figures::{CaseCurve, Quantity, tightening_chart};
-use serde::Serialize;
-use solver::case::CaseParams;
+use serde_json::Value;
+use solver::case::{CaseParams, PARAMETERS, Parameter};
 use solver::protocol::{self, CaseReport, Status};
 use std::path::PathBuf;
 
-/// Case parameters as flags; any flag left out takes the paper's default
-/// (the defaults live in `solver::case::CaseParams`).
-#[derive(clap::Args, Serialize, Default)]
+/// Case parameters as flags, one per entry of `solver::case::PARAMETERS`
+/// (`--pull-speed` for `pull_speed`, its help the table's doc); a flag left out
+/// takes the paper's default (`CaseParams::default`).
+#[derive(Clone, Debug, Default)]
 pub struct ParamFlags {
-    /// Number of passes n (1..8) [default 3].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    n: Option<u32>,
-    /// Rod radius h (m) [default 1.6e-3].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    h: Option<f64>,
-    /// Friction coefficient mu [default 0.1].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    mu: Option<f64>,
-    /// Friction law: isotropic (Coulomb's disk) or sliding_direction (along the previous sliding direction only) [default isotropic].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    friction_law: Option<String>,
-    /// Friction at the rods' surfaces, so rods roll on each other; false: at the centre lines [default true].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    rolling: Option<bool>,
-    /// Gravity (m/s^2) as gx,gy,gz [default 0,0,0, as in the paper's simulations].
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    gravity: Option<Vec<f64>>,
-    /// Rod length L (m) [default 1].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    length: Option<f64>,
-    /// Node count K [default 301].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    nodes: Option<usize>,
-    /// Young's modulus E (Pa) [default 1.8e6].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    youngs_modulus: Option<f64>,
-    /// Poisson's ratio [default 0.5].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    poisson_ratio: Option<f64>,
-    /// Density (kg/m^3) [default 1000].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    density: Option<f64>,
-    /// Pull speed of each clamp (m/s) [default 3e-3].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pull_speed: Option<f64>,
-    /// Time step (s), the largest one when adaptive [default: 5e-4 at L = 1 m, K = 301, scaled with the squared edge length].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    dt: Option<f64>,
-    /// Adapt the time step to the penetration, between dt/64 and dt [default true].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    adaptive_dt: Option<bool>,
-    /// Relative tolerance of each step's contact solve [default 1e-6].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    contact_tolerance: Option<f64>,
-    /// Longest relaxation before pulling (s) [default 2].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    relax_time: Option<f64>,
-    /// Viscous damping rate while pulling (1/s) [default 0].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    damping: Option<f64>,
-    /// Initial clamp-to-clamp distance (m) [default: builder's].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    end_to_end: Option<f64>,
-    /// Strand length of a braid pass (m) [default: builder's].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    braid_length: Option<f64>,
-    /// Sampling interval in l_k bar [default 0.5].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    sample_interval: Option<f64>,
-    /// Stop at this l_k bar [default 60].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    min_l_k_bar: Option<f64>,
-    /// Stop this far (in l_k bar) past the inversion [default 10].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    stop_after_inversion: Option<f64>,
-    /// Stop when F bar exceeds this [default: never].
-    #[arg(long)]
-    #[serde(skip_serializing_if = "Option::is_none")]
-    max_force_bar: Option<f64>,
-    /// Start from this knot instead of the builder's: a text file of K = nodes
-    /// points `x y z` (m), one per line, comma or whitespace separated, extra
-    /// columns ignored, `#` comments [default: the builder's knot].
-    #[arg(long)]
-    #[serde(skip)]
+    /// The given flags as JSON values, by parameter name.
+    given: serde_json::Map<String, Value>,
+    /// `--initial-shape FILE`: the points are read from a file on the CLI.
     initial_shape: Option<PathBuf>,
+}
+
+/// The parameter the CLI reads from a file.
+const SHAPE: &str = "initial_shape";
+
+impl clap::FromArgMatches for ParamFlags {
+    fn from_arg_matches(matches: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut flags = Self::default();
+        flags.update_from_arg_matches(matches)?;
+        Ok(flags)
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
+        for p in PARAMETERS {
+            if p.name == SHAPE {
+                self.initial_shape = matches.get_one::<PathBuf>(p.name).cloned();
+            } else if let Some(v) = matches.get_one::<Value>(p.name) {
+                self.given.insert(p.name.to_string(), v.clone());
+            }
+        }
+        Ok(())
+    }
+}
+
+impl clap::Args for ParamFlags {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        let defaults = serde_json::to_value(CaseParams::default()).expect("params serialise");
+        cmd.args(PARAMETERS.iter().map(|p| flag(p, &defaults[p.name])))
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+/// The flag of parameter `p`, parsed to the JSON type of its `default`.
+fn flag(p: &Parameter, default: &Value) -> clap::Arg {
+    let arg = clap::Arg::new(p.name).long(p.name.replace('_', "-"));
+    if p.name == SHAPE {
+        return arg
+            .value_name("FILE")
+            .value_parser(clap::value_parser!(PathBuf))
+            .help(
+                "Start from this knot instead of the builder's: a text file of K = nodes points `x y z` (m), \
+                 one per line, comma or whitespace separated, extra columns ignored, `#` comments",
+            );
+    }
+    let kind = default.clone();
+    arg.help(p.doc)
+        .allow_negative_numbers(true)
+        .value_parser(move |text: &str| parse(&kind, text))
+}
+
+/// A flag's text as a JSON value of the type of the parameter's default
+/// (numbers where the default is null; `x,y,z` for vectors).
+fn parse(default: &Value, text: &str) -> Result<Value, String> {
+    let number = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .map(Value::from)
+            .map_err(|e| format!("{v:?}: {e}"))
+    };
+    match default {
+        Value::Bool(_) => text.parse::<bool>().map(Value::Bool).map_err(|e| e.to_string()),
+        Value::Number(n) if n.is_u64() => text.parse::<u64>().map(Value::from).map_err(|e| e.to_string()),
+        Value::String(_) => Ok(Value::String(text.to_string())),
+        Value::Array(_) => text
+            .split(',')
+            .map(number)
+            .collect::<Result<Vec<_>, _>>()
+            .map(Value::Array),
+        _ => number(text),
+    }
 }
 
 impl ParamFlags {
     /// The case parameters: the given flags over the paper's defaults.
     pub fn params(&self) -> Result<CaseParams> {
-        let value = serde_json::to_value(self)?;
-        let mut params: CaseParams = serde_json::from_value(value)?;
+        let mut params: CaseParams = serde_json::from_value(Value::Object(self.given.clone()))?;
         if let Some(path) = &self.initial_shape {
             let text =
                 std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;

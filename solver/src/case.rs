@@ -140,6 +140,121 @@ pub struct StartShape {
     pub loop_middle: usize,
 }
 
+/// One case parameter: its name (the JSON key; the CLI flag is `--` and the
+/// name with dashes) and its documentation (unit, range, default). Its type
+/// and default come from [`CaseParams::default`]; its range is checked by
+/// [`CaseParams::validate`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Parameter {
+    pub name: &'static str,
+    pub doc: &'static str,
+}
+
+/// Every `CaseParams` field, documented once: the CLI flags, the OpenAPI
+/// schema and the web form are made from this table.
+pub const PARAMETERS: &[Parameter] = &[
+    Parameter {
+        name: "n",
+        doc: "Number of passes (unknotting number): an integer in 1..=8.",
+    },
+    Parameter {
+        name: "h",
+        doc: "Rod radius h (m): positive and below L/50. Paper: 1.6 mm.",
+    },
+    Parameter {
+        name: "mu",
+        doc: "Coulomb friction coefficient: 0..=2. Paper: 0.1.",
+    },
+    Parameter {
+        name: "friction_law",
+        doc: "Which tangential forces friction may take (eqs. 9-10): \"isotropic\" (default: Coulomb's disk |F_t| <= mu F_n) or \"sliding_direction\" (only along the previous step's sliding direction; fails the capstan check, kept for sensitivity studies, docs/FIDELITY.md).",
+    },
+    Parameter {
+        name: "rolling",
+        doc: "Friction acts at the rods' surfaces (default true): a contact's slip includes each rod's spin about its axis and friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g sin alpha). false: friction at the centre lines.",
+    },
+    Parameter {
+        name: "gravity",
+        doc: "Gravitational acceleration (m/s^2), three components each in [-1000, 1000]. Default [0, 0, 0], as in the paper's simulations; the pull is along x.",
+    },
+    Parameter {
+        name: "length",
+        doc: "Rod length L (m): 0.05..=100. Paper: 1 m.",
+    },
+    Parameter {
+        name: "nodes",
+        doc: "Node count K: 51..=4001 (the knot builder needs edges of at most 4h). Paper: 301.",
+    },
+    Parameter {
+        name: "youngs_modulus",
+        doc: "Young's modulus E (Pa): 1e3..=1e12. Paper: 1.8 MPa.",
+    },
+    Parameter {
+        name: "poisson_ratio",
+        doc: "Poisson's ratio: 0..=0.5. Paper: 0.5.",
+    },
+    Parameter {
+        name: "density",
+        doc: "Density (kg/m^3): 1..=1e5. Paper's code: 1000.",
+    },
+    Parameter {
+        name: "pull_speed",
+        doc: "Pulling speed of each clamp (m/s): 1e-5..=1.",
+    },
+    Parameter {
+        name: "dt",
+        doc: "Time step (s): 1e-6..=1e-2; with adaptive_dt the largest step; null: 0.5 ms (half the paper's code's 1 ms, converged within 0.4 %) at L = 1 m, K = 301, scaled with the square of the edge length L/(K-1).",
+    },
+    Parameter {
+        name: "adaptive_dt",
+        doc: "Halve the step (down to dt/64) while contacts penetrate and grow it back when calm; false: constant dt.",
+    },
+    Parameter {
+        name: "contact_tolerance",
+        doc: "Relative tolerance of each step's frictional contact solve (projected Gauss-Seidel, at most 200 sweeps): 1e-12..=1e-3.",
+    },
+    Parameter {
+        name: "relax_time",
+        doc: "Longest relaxation with the ends held before pulling (s): 0..=100.",
+    },
+    Parameter {
+        name: "relax_tolerance",
+        doc: "Relaxation ends when the kinetic energy falls below this times the elastic energy: 0..=1.",
+    },
+    Parameter {
+        name: "damping",
+        doc: "Mass-proportional viscous damping rate while pulling (1/s): 0..=1e4.",
+    },
+    Parameter {
+        name: "end_to_end",
+        doc: "Initial clamp-to-clamp distance (m), in (0, L]; null: the knot builder's default for n.",
+    },
+    Parameter {
+        name: "braid_length",
+        doc: "Strand length of a braid pass (m), in (0, L/2]; null: the builder's default.",
+    },
+    Parameter {
+        name: "sample_interval",
+        doc: "Series sampling interval in l_k bar: 1e-3..=100.",
+    },
+    Parameter {
+        name: "min_l_k_bar",
+        doc: "Stop when l_k bar falls below this: 0..=1e6.",
+    },
+    Parameter {
+        name: "stop_after_inversion",
+        doc: "Stop this far in l_k bar past a detected inversion; null: never early.",
+    },
+    Parameter {
+        name: "max_force_bar",
+        doc: "Stop when F bar exceeds this (the knot is tight); null: never.",
+    },
+    Parameter {
+        name: "initial_shape",
+        doc: "Start from these points instead of the builder's knot: an array of K = nodes points [x, y, z] (m); the polyline must be `length` long (within 1 %), every node between the ends along the line joining them (the clamps hold the first and last points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass overhand knot. null: the builder's knot. Mind the body limit (64 KiB by default: about 700 points).",
+    },
+];
+
 /// A parameter outside its documented range.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 #[error("{field}: {reason}")]
@@ -311,8 +426,8 @@ impl CaseParams {
             length: self.length,
             nodes: self.nodes,
             radius: self.h,
-            end_to_end: self.end_to_end,
-            braid_length: self.braid_length,
+            clamp_span: self.end_to_end,
+            pass_length: self.braid_length,
             loop_length: None,
         }
     }
@@ -412,8 +527,9 @@ impl CaseParams {
         let field = match &e {
             KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => "n",
             KnotError::InvalidParameter { name, .. } => match *name {
-                "length" => "length",
                 "radius" => "h",
+                "clamp_span" => "end_to_end",
+                "pass_length" => "braid_length",
                 other => other,
             },
             KnotError::RadiusTooLarge { .. } | KnotError::Clearance { .. } => "h",

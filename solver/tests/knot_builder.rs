@@ -326,7 +326,7 @@ fn check_shape(spec: &KnotSpec, shape: &KnotShape) {
         );
     }
     assert!(p[1].x > p[0].x && p[k - 1].x > p[k - 2].x, "{label}");
-    assert!((shape.end_to_end - (p[k - 1].x - p[0].x)).abs() <= 1e-15 * length);
+    assert!((shape.clamp_span - (p[k - 1].x - p[0].x)).abs() <= 1e-15 * length);
     let clearance = min_non_neighbour_distance(p, h, edge);
     assert!(clearance >= 2.0 * h, "{label}: clearance {clearance} < 2h");
     assert_eq!(knot_determinant(p), Ok(2 * u64::from(spec.n) + 1), "{label}");
@@ -340,9 +340,9 @@ fn check_shape(spec: &KnotSpec, shape: &KnotShape) {
     }
     let lengths = [
         shape.tail_length,
-        shape.braid_length,
+        shape.pass_length,
         shape.loop_length,
-        shape.braid_length,
+        shape.pass_length,
         shape.tail_length,
     ];
     for (part, expected) in parts.iter().zip(lengths) {
@@ -352,7 +352,7 @@ fn check_shape(spec: &KnotSpec, shape: &KnotShape) {
             "{label}: region {part:?} vs {expected}"
         );
     }
-    let designed = 2.0 * (shape.tail_length + shape.braid_length) + shape.loop_length;
+    let designed = 2.0 * (shape.tail_length + shape.pass_length) + shape.loop_length;
     assert!(
         (designed - length).abs() <= 1e-2 * length,
         "{label}: designed length {designed}"
@@ -391,12 +391,12 @@ fn defaults_follow_the_paper_relaxed_shapes() {
     let paper = [(0.12, 0.60), (0.19, 0.47), (0.24, 0.41), (0.28, 0.34)];
     for (n, (braid, loop_length)) in (1..=4).zip(paper) {
         let shape = build(&KnotSpec::paper(n)).unwrap();
-        assert!((shape.braid_length - braid).abs() < 1e-12, "n={n}");
+        assert!((shape.pass_length - braid).abs() < 1e-12, "n={n}");
         assert!((shape.loop_length - loop_length).abs() < 1e-12, "n={n}");
         assert!(
-            (0.27..=0.33).contains(&shape.end_to_end),
+            (0.27..=0.33).contains(&shape.clamp_span),
             "n={n}: {}",
-            shape.end_to_end
+            shape.clamp_span
         );
     }
     for n in 5..=8 {
@@ -404,22 +404,22 @@ fn defaults_follow_the_paper_relaxed_shapes() {
             build(&KnotSpec::paper(n - 1)).unwrap(),
             build(&KnotSpec::paper(n)).unwrap(),
         );
-        assert!(longer.braid_length > shorter.braid_length && longer.loop_length < shorter.loop_length);
+        assert!(longer.pass_length > shorter.pass_length && longer.loop_length < shorter.loop_length);
     }
 }
 
 #[test]
 fn explicit_parameters_are_honoured() {
     let spec = KnotSpec {
-        end_to_end: Some(0.29),
-        braid_length: Some(0.25),
+        clamp_span: Some(0.29),
+        pass_length: Some(0.25),
         loop_length: Some(0.42),
         ..KnotSpec::paper(3)
     };
     let shape = build(&spec).unwrap();
     check_shape(&spec, &shape);
-    assert!((shape.end_to_end - 0.29).abs() < 1e-9);
-    assert_eq!(shape.braid_length, 0.25);
+    assert!((shape.clamp_span - 0.29).abs() < 1e-9);
+    assert_eq!(shape.pass_length, 0.25);
     assert_eq!(shape.loop_length, 0.42);
     assert!((shape.tail_length - (1.0 - 0.5 - 0.42) / 2.0).abs() < 1e-3);
 }
@@ -463,9 +463,9 @@ fn impossible_inputs_are_rejected() {
         KnotError::InvalidParameter { name: "radius", .. }
     ));
     assert!(matches!(
-        with(&|s| s.end_to_end = Some(0.0)),
+        with(&|s| s.clamp_span = Some(0.0)),
         KnotError::InvalidParameter {
-            name: "end_to_end",
+            name: "clamp_span",
             ..
         }
     ));
@@ -481,7 +481,7 @@ fn impossible_inputs_are_rejected() {
     .unwrap();
     assert!(matches!(with(&|s| s.nodes = 2), KnotError::TooFewNodes { .. }));
     assert!(matches!(
-        with(&|s| s.braid_length = Some(0.05)),
+        with(&|s| s.pass_length = Some(0.05)),
         KnotError::BraidTooShort { .. }
     ));
     assert!(matches!(
@@ -492,17 +492,17 @@ fn impossible_inputs_are_rejected() {
         with(&|s| s.loop_length = Some(0.05)),
         KnotError::Infeasible { .. }
     ));
-    let KnotError::EndToEndOutOfRange { min, max, .. } = with(&|s| s.end_to_end = Some(0.6)) else {
+    let KnotError::EndToEndOutOfRange { min, max, .. } = with(&|s| s.clamp_span = Some(0.6)) else {
         panic!("end-to-end out of range")
     };
     assert!(min < max && max < 0.6);
     for l in [min, 0.5 * (min + max), max] {
         let spec = KnotSpec {
-            end_to_end: Some(l),
+            clamp_span: Some(l),
             ..paper.clone()
         };
         let shape = build(&spec).unwrap_or_else(|e| panic!("end-to-end {l} in [{min}, {max}]: {e}"));
-        assert!((shape.end_to_end - l).abs() < 1e-9);
+        assert!((shape.clamp_span - l).abs() < 1e-9);
     }
     // Thick rods leave no room for many passes.
     assert!(matches!(

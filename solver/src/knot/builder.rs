@@ -69,12 +69,12 @@ pub struct KnotSpec {
     /// Clamp-to-clamp distance `l_c`. Default: `[0.28, 0.30, 0.31, 0.32, 0.31,
     /// 0.30, 0.29, 0.28][n-1] L`, moved into the feasible range if needed.
     #[serde(default)]
-    pub end_to_end: Option<f64>,
+    pub clamp_span: Option<f64>,
     /// Strand length of each braid pass `l_b`. Default: `[0.12, 0.19, 0.24,
     /// 0.28, 0.30, 0.315, 0.33, 0.345][n-1] L`, but at least
     /// [`BRAID_MARGIN`] times the shortest braid for radius `h`.
     #[serde(default)]
-    pub braid_length: Option<f64>,
+    pub pass_length: Option<f64>,
     /// Loop length `l_l`. Default: `L - 2 l_b - 2 t L` with the tail fraction
     /// `t = [0.08, 0.075, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035][n-1]`.
     #[serde(default)]
@@ -89,8 +89,8 @@ impl KnotSpec {
             length: 1.0,
             nodes: 301,
             radius: 1.6e-3,
-            end_to_end: None,
-            braid_length: None,
+            clamp_span: None,
+            pass_length: None,
             loop_length: None,
         }
     }
@@ -125,9 +125,9 @@ pub struct KnotShape {
     /// Edge length `L / (K - 1)`.
     pub edge_length: f64,
     /// Clamp-to-clamp distance `x_{K-1} - x_0`.
-    pub end_to_end: f64,
+    pub clamp_span: f64,
     /// Mean strand length of one braid pass (designed curve).
-    pub braid_length: f64,
+    pub pass_length: f64,
     /// Loop length (designed curve).
     pub loop_length: f64,
     /// Length of each tail (designed curve).
@@ -150,23 +150,23 @@ pub enum KnotError {
     )]
     TooFewNodes { nodes: usize, min: usize },
     #[error(
-        "braid strand length {braid_length} m is too short for 2n+1 half twists of radius h: need {min} m"
+        "braid strand length {pass_length} m is too short for 2n+1 half twists of radius h: need {min} m"
     )]
-    BraidTooShort { braid_length: f64, min: f64 },
+    BraidTooShort { pass_length: f64, min: f64 },
     #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
     TailsTooShort { tail_length: f64, min: f64 },
     #[error(
-        "no valid shape with braid passes of {braid_length} m, a loop of {loop_length} m and tails of \
+        "no valid shape with braid passes of {pass_length} m, a loop of {loop_length} m and tails of \
          {tail_length} m: the loop cannot close around the braid, or the tails cannot reach the axis, \
          with bend radii of at least 3 helix radii"
     )]
     Infeasible {
-        braid_length: f64,
+        pass_length: f64,
         loop_length: f64,
         tail_length: f64,
     },
-    #[error("end-to-end distance {end_to_end} m is outside the feasible range [{min}, {max}] m")]
-    EndToEndOutOfRange { end_to_end: f64, min: f64, max: f64 },
+    #[error("end-to-end distance {clamp_span} m is outside the feasible range [{min}, {max}] m")]
+    EndToEndOutOfRange { clamp_span: f64, min: f64, max: f64 },
     #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
     Clearance { distance: f64, required: f64 },
     #[error("topology check failed: {0}")]
@@ -196,8 +196,8 @@ fn validate(spec: &KnotSpec) -> Result<(), KnotError> {
         return Err(KnotError::Passes(spec.n));
     }
     let optional = [
-        ("end_to_end", spec.end_to_end),
-        ("braid_length", spec.braid_length),
+        ("clamp_span", spec.clamp_span),
+        ("pass_length", spec.pass_length),
         ("loop_length", spec.loop_length),
     ];
     let given = optional.into_iter().filter_map(|(name, v)| v.map(|v| (name, v)));
@@ -423,11 +423,11 @@ fn lengths(spec: &KnotSpec) -> Result<Lengths, KnotError> {
     let design = Design::new(spec, GAPS[0]);
     let shortest = design.strand(design.braid.min_centreline(MIN_PITCH), 0.0).0;
     let strand = spec
-        .braid_length
+        .pass_length
         .unwrap_or((DEFAULT_BRAID[index] * length).max(BRAID_MARGIN * shortest));
     if strand < shortest {
         return Err(KnotError::BraidTooShort {
-            braid_length: strand,
+            pass_length: strand,
             min: shortest,
         });
     }
@@ -532,7 +532,7 @@ struct Resampled {
 impl Design {
     fn infeasible(&self, tail: f64) -> KnotError {
         KnotError::Infeasible {
-            braid_length: self.strand_length,
+            pass_length: self.strand_length,
             loop_length: self.loop_length,
             tail_length: tail,
         }
@@ -547,19 +547,19 @@ impl Design {
         })
     }
 
-    /// Resamples the knot with clamp-to-clamp distance `end_to_end` to
+    /// Resamples the knot with clamp-to-clamp distance `clamp_span` to
     /// `nodes` equal chords. These consume slightly more than `L` of curve,
     /// so the designed curve (initially `curve` long) is lengthened, in the
     /// tails, by that excess until the last node lands on clamp B. Returns
     /// the knot and the converged curve length, or `None` if some iterate
     /// has no feasible shape.
-    fn resample(&self, end_to_end: f64, mut curve: f64, nodes: usize) -> Option<(Resampled, f64)> {
+    fn resample(&self, clamp_span: f64, mut curve: f64, nodes: usize) -> Option<(Resampled, f64)> {
         // Beyond clamp B, more than the excess (a few per mille of L).
         let extension = 4.0 * self.edge + 0.02 * curve;
         let mut result = None;
         for _ in 0..8 {
             let tail = 0.5 * (curve - 2.0 * self.strand_length - self.loop_length);
-            let theta = self.angle_for(tail, 0.5 * end_to_end)?;
+            let theta = self.angle_for(tail, 0.5 * clamp_span)?;
             let plan = self.plan(tail, theta)?;
             let dense = plan.dense(self.spacing, extension);
             let (points, positions) = equal_chords(&dense.points, &dense.arc, self.edge, nodes)?;
@@ -593,7 +593,7 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
     // A provisional knot gives the resampling excess; the window is then
     // computed for the tails lengthened by it.
     let window = design.window(tail)?;
-    let provisional = spec.end_to_end.map_or_else(
+    let provisional = spec.clamp_span.map_or_else(
         || window.default(fraction, length),
         |l| l.clamp(window.min, window.max),
     );
@@ -602,15 +602,15 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
         .ok_or_else(|| design.infeasible(tail))?;
     let window = design.window(0.5 * (curve - 2.0 * strand - loop_length))?;
     let (min, max) = window.reported();
-    let out_of_range = |end_to_end| KnotError::EndToEndOutOfRange { end_to_end, min, max };
-    let end_to_end = match spec.end_to_end {
+    let out_of_range = |clamp_span| KnotError::EndToEndOutOfRange { clamp_span, min, max };
+    let clamp_span = match spec.clamp_span {
         Some(l) if l < window.min || l > window.max => return Err(out_of_range(l)),
         Some(l) => l,
         None => window.default(fraction, length),
     };
     let (knot, _) = design
-        .resample(end_to_end, curve, spec.nodes)
-        .ok_or_else(|| out_of_range(end_to_end))?;
+        .resample(clamp_span, curve, spec.nodes)
+        .ok_or_else(|| out_of_range(clamp_span))?;
 
     let Resampled {
         plan,
@@ -634,11 +634,11 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
         return Err(KnotError::WrongKnot { got, expected });
     }
     Ok(KnotShape {
-        end_to_end: points[points.len() - 1].x - points[0].x,
+        clamp_span: points[points.len() - 1].x - points[0].x,
         points,
         regions,
         edge_length: design.edge,
-        braid_length: strand,
+        pass_length: strand,
         loop_length,
         tail_length: plan.tail_length,
         helix_radius: design.braid.radius,

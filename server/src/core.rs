@@ -64,10 +64,6 @@ impl Core {
         &self.limits
     }
 
-    pub fn store(&self) -> &Arc<dyn Store> {
-        &self.store
-    }
-
     /// Parses a request body into a spec: 400 for malformed JSON, 422 with the
     /// field for unknown fields and wrong types. Returns the spec and the
     /// parsed body (for the idempotency hash).

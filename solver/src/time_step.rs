@@ -88,11 +88,6 @@ impl TimeStep {
         }
     }
 
-    /// The step the next [`TimeStep::advance`] tries first.
-    pub fn dt(&self) -> f64 {
-        self.dt
-    }
-
     /// Advances `world` by one accepted step.
     pub fn advance(&mut self, world: &mut World) -> Result<Advance, WorldError> {
         let o = self.options;

@@ -95,10 +95,6 @@ impl PoolHandle {
         self.config.workers
     }
 
-    pub fn config(&self) -> &PoolConfig {
-        &self.config
-    }
-
     /// Slots that have neither polled the queue nor heartbeated for longer
     /// than `max(4 * heartbeat, 4 * poll, 10 s)`: a pool that silently stopped.
     pub fn stalled_slots(&self) -> Vec<usize> {

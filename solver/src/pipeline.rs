@@ -12,10 +12,10 @@
 //!
 //! Contact forces couple rods only through step 3, so each rod's Newton system
 //! stays banded and a step costs O(K) plus O(contacts * sweeps).
-use crate::contact::FrictionLaw;
-use crate::contact::broad_phase::{BroadPhase, CandidatePair, Segment, neighbour_gap};
+use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
-use crate::contact::segment::{SegmentPair, closest_points};
+use crate::contact::segment::closest_points;
+use crate::contact::{FrictionLaw, narrow_phase};
 use crate::counters::Counters;
 use crate::energies::{self, Terms};
 use crate::external::{Environment, gravity};
@@ -88,76 +88,6 @@ pub enum WorldError {
     Step { rod: usize, source: StepError },
     #[error("contact detection: {0}")]
     Detection(String),
-}
-
-/// Whether candidate `k` duplicates a neighbour: its closest point lies on a
-/// node shared with the adjacent segment of the same rod, and that segment also
-/// pairs with the same partner. Such an endpoint pair has a normal tilted
-/// towards the node, and closing its linearised gap would push back on a rod
-/// sliding smoothly from one segment onto the next. When both pairs meet at the
-/// shared node, the one with the lower segment index is kept.
-fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
-    const END: f64 = 1e-9;
-    let p = &pairs[k];
-    let find = |i: usize, j: usize| {
-        let key = if i < j { (i, j) } else { (j, i) };
-        pairs
-            .binary_search_by(|q| (q.i, q.j).cmp(&key))
-            .ok()
-            .map(|m| (m, key.0 == i))
-    };
-    // (this segment, partner, parameter on this segment)
-    for (me, other, param) in [(p.i, p.j, p.closest.s), (p.j, p.i, p.closest.t)] {
-        let seg = &segments[me];
-        let neighbour = if param <= END {
-            me.checked_sub(1)
-        } else if param >= 1.0 - END {
-            Some(me + 1)
-        } else {
-            None
-        };
-        let Some(n) = neighbour.filter(|&n| {
-            n < segments.len() && segments[n].body == seg.body && segments[n].index.abs_diff(seg.index) == 1
-        }) else {
-            continue;
-        };
-        if n == other {
-            continue;
-        }
-        if let Some((m, n_is_first)) = find(n, other) {
-            let q = &pairs[m];
-            let n_param = if n_is_first { q.closest.s } else { q.closest.t };
-            let n_at_shared = if n < me {
-                n_param >= 1.0 - END
-            } else {
-                n_param <= END
-            };
-            if !n_at_shared || n < me {
-                return true;
-            }
-        }
-    }
-    false
-}
-
-/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of the relative
-/// velocity of the closest points (A relative to B) at the start of the
-/// step; zero when there is none.
-fn sliding_direction(
-    rods: &[Rod],
-    sa: &Segment,
-    sb: &Segment,
-    closest: &SegmentPair,
-    normal: &Vector3<f64>,
-) -> Vector3<f64> {
-    let (ra, rb) = (&rods[sa.body], &rods[sb.body]);
-    let (s, t) = (closest.s, closest.t);
-    let u = (1.0 - s) * ra.node_velocity(sa.index) + s * ra.node_velocity(sa.index + 1)
-        - (1.0 - t) * rb.node_velocity(sb.index)
-        - t * rb.node_velocity(sb.index + 1);
-    let ut = u - normal * u.dot(normal);
-    let norm = ut.norm();
-    if norm > 0.0 { ut / norm } else { Vector3::zeros() }
 }
 
 /// Several rods, their steppers and the contact machinery with reusable buffers.
@@ -345,7 +275,7 @@ impl World {
         self.contacts.clear();
         self.pair_ids.clear();
         for (k, p) in pairs.iter().enumerate() {
-            if redundant(pairs, k, &self.segments) {
+            if narrow_phase::redundant(pairs, k, &self.segments) {
                 continue;
             }
             let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
@@ -369,7 +299,8 @@ impl World {
                     c.spin = [(ea, lever(sa)), (eb, lever(sb))];
                 }
                 if self.contact.friction_law == FrictionLaw::SlidingDirection {
-                    c.sliding_direction = sliding_direction(&self.rods, sa, sb, &p.closest, &c.normal);
+                    c.sliding_direction =
+                        narrow_phase::sliding_direction(&self.rods, sa, sb, &p.closest, &c.normal);
                 }
                 self.contacts.push(c);
                 self.pair_ids.push((p.i, p.j));
@@ -392,7 +323,7 @@ impl World {
             gravity::add(rod, &self.env.gravity, force);
             // A free DOF's contact-free velocity, v + dt M^-1 (F - grad E),
             // damped, and its effective inverse mass (the same rule as the stepper's).
-            let damp = 1.0 / (1.0 + self.env.damping * dt);
+            let damp = 1.0 / self.env.damping_factor(dt);
             let free = |d: usize| {
                 let m = rod.mass[d];
                 (damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / m), damp / m)

@@ -257,8 +257,7 @@ impl Stepper {
     }
 
     fn attempt(&mut self, rod: &mut Rod, env: &Environment, h: f64) -> Result<Attempt, (NewtonFailure, u32)> {
-        let gamma = env.damping;
-        let c_in = (1.0 + gamma * h) / (h * h);
+        let c_in = env.damping_factor(h) / (h * h);
         let edge = rod.length() / rod.edges() as f64;
         let extent = (0..rod.nodes())
             .map(|i| rod.node(i).amax())

@@ -2,6 +2,7 @@
 pub mod broad_phase;
 pub mod cone;
 pub mod gauss_seidel;
+pub mod narrow_phase;
 pub mod segment;
 
 use serde::{Deserialize, Serialize};

@@ -14,3 +14,12 @@ pub struct Environment {
     /// Mass-proportional viscous damping rate gamma (1/s): F = -gamma M v.
     pub damping: f64,
 }
+
+impl Environment {
+    /// The factor 1 + gamma dt by which backward Euler's damping (F = -gamma
+    /// M v) scales the inertia of a step of length `dt`: the one damping rule
+    /// of the stepper and the contact solve's free velocities.
+    pub fn damping_factor(&self, dt: f64) -> f64 {
+        1.0 + self.damping * dt
+    }
+}

@@ -240,15 +240,10 @@ pub fn run(args: Args) -> Result<()> {
         (2..=5u32)
             .into_par_iter()
             .map(|n| {
-                let params = solver::simplified::Params {
-                    n,
-                    radius: CaseParams::default().h,
-                    ..Default::default()
-                };
-                let snap = solver::simplified::reproduce::sweep_row(params)
+                let snap = solver::simplified::reproduce::snap_l_k_bar(n, CaseParams::default().h)
                     .map_err(|e| tracing::warn!(n, error = %e, "simplified model failed"))
                     .ok()
-                    .and_then(|(row, _)| row.snap_l_k_bar);
+                    .flatten();
                 (n, snap)
             })
             .collect()

@@ -107,8 +107,9 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     assert_eq!(points.len(), 4);
     // The simplified model's reference: scale-free, so at h = 5 mm it is the
     // n = 3 snap computed at the paper's 1.6 mm.
-    let (row, _) = solver::simplified::reproduce::sweep_row(solver::simplified::Params::default()).unwrap();
-    let at_paper_h = row.snap_l_k_bar.unwrap();
+    let at_paper_h = solver::simplified::reproduce::snap_l_k_bar(3, 1.6e-3)
+        .unwrap()
+        .unwrap();
     for p in points {
         let got = p["simplified_l_k_bar"].as_f64().unwrap();
         assert!(

@@ -301,19 +301,14 @@ impl Core {
         if let Some(v) = self.simplified.lock().expect("simplified cache").get(&key) {
             return *v;
         }
-        let params = solver::simplified::Params {
-            n,
-            radius: h,
-            ..Default::default()
-        };
-        let snap = tokio::task::spawn_blocking(move || solver::simplified::reproduce::sweep_row(params))
+        let snap = tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
             .await
             .ok()
             .and_then(|r| {
                 r.map_err(|e| tracing::warn!(n, h, error = %e, "simplified model failed"))
                     .ok()
             })
-            .and_then(|(row, _)| row.snap_l_k_bar);
+            .flatten();
         self.simplified
             .lock()
             .expect("simplified cache")
@@ -421,18 +416,18 @@ impl Core {
     /// The curves of every finished case of a sweep overlaid (grid order),
     /// their inversions marked.
     pub async fn sweep_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
-        let detail = self.sweep(id).await?;
+        let record = self.record(id).await?;
         let mut loaded = Vec::new();
-        for view in &detail.cases {
-            let c = self.case_record(view.case_id).await?;
-            if c.result.is_some() {
-                let label = view
+        // The sweep's case rows already hold their result summaries: only the series are read.
+        for s in self.store.sweep_cases(id).await? {
+            if s.case.result.is_some() {
+                let label = case_view(&s, &record.varied)
                     .params
                     .iter()
                     .map(|(k, v)| format!("{k} = {v}"))
                     .collect::<Vec<_>>()
                     .join(", ");
-                loaded.push((label, self.series(&c).await?, inversion_of(&c)));
+                loaded.push((label, self.series(&s.case).await?, inversion_of(&s.case)));
             }
         }
         let curves: Vec<CaseCurve> = loaded

@@ -22,7 +22,7 @@ try:
     for _ in range(50):
         try: call(port, "GET", "/status"); break
         except Exception: time.sleep(0.2)
-    shots = [("sweep", f"#/sweeps/{sweep}", 1280, 1500), ("case", f"#/cases/{case}", 1280, 1500), ("front-390px", "#/", 390, 1400)]
+    shots = [("sweep", f"#/sweeps/{sweep}", 1280, 1500), ("case", f"#/cases/{case}", 1280, 1500)]
     for name, route, w, h in shots:
         args = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--enable-unsafe-swiftshader",
                 f"--window-size={w},{h}", "--hide-scrollbars"]

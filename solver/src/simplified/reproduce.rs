@@ -170,6 +170,18 @@ pub fn derivative_check(
     Ok(rows)
 }
 
+/// The snap-through l̄_k of the paper's simplified model (epsilon = 0.7,
+/// phi = pi/3) for `n` passes and rod radius `radius`: the dashed reference of
+/// Figs 14 and 15; `None` where the model has no snap (n = 1).
+pub fn snap_l_k_bar(n: u32, radius: f64) -> Result<Option<f64>, SimplifiedError> {
+    let params = Params {
+        n,
+        radius,
+        ..Params::default()
+    };
+    Ok(sweep_row(params)?.0.snap_l_k_bar)
+}
+
 /// The folds of the simplified model for `params` (one row of Figs. 14 and 15).
 pub fn sweep_row(params: Params) -> Result<(SweepRow, Bifurcation), SimplifiedError> {
     let b = bifurcation(&BifurcationSpec::for_params(params))?;

@@ -261,6 +261,70 @@ async fn sweeps_share_cases_by_key_and_reuse_results() {
     }
 }
 
+/// Asking again for a case that failed queues a new attempt without touching
+/// the sweep that ended with the failure, and cancelling the new sweep stops
+/// only the new attempt.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_new_attempt_of_a_failed_shared_case_leaves_the_finished_sweep_as_it_ended() {
+    for b in backends("retire").await {
+        let s = &*b.store;
+        let (first, _) = create(s, sweep(cases(1))).await;
+        for _ in 0..2 {
+            tokio::time::sleep(Duration::from_millis(5)).await;
+            let c = s.claim("w", LEASE).await.unwrap().expect("queued");
+            s.fail_attempt(&c.lease, "diverged").await.unwrap();
+        }
+        let failed = s.sweep_cases(first).await.unwrap()[0].case.clone();
+        assert_eq!(failed.state, CaseState::Failed, "{}", b.name);
+        let (second, cached) = create(s, sweep(cases(1))).await;
+        assert_eq!(cached, 0);
+        let retry = s.sweep_cases(second).await.unwrap()[0].case.clone();
+        assert_ne!(retry.id, failed.id, "{}: a new row for the new attempt", b.name);
+        assert_eq!(retry.key, failed.key, "{}: the same cache key", b.name);
+        assert_eq!(retry.state, CaseState::Queued);
+        let old = s.get_case(failed.id).await.unwrap().unwrap();
+        assert_eq!(
+            old.state,
+            CaseState::Failed,
+            "{}: the first sweep's case keeps its outcome",
+            b.name
+        );
+        assert!(old.last_error.unwrap().contains("diverged"));
+        assert_eq!(s.case_sweeps(failed.id).await.unwrap(), [first]);
+        assert_eq!(s.case_sweeps(retry.id).await.unwrap(), [second]);
+        let counts = |sweep: i64| async move {
+            s.sweep_status_counts()
+                .await
+                .unwrap()
+                .into_iter()
+                .filter(|(id, _, _)| *id == sweep)
+                .map(|(_, st, n)| (st, n))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(counts(first).await, [("failed".to_string(), 1)], "{}", b.name);
+        let cancelled = s.control_sweep(second, SweepAction::Cancel).await.unwrap();
+        assert_eq!(cancelled.state, SweepState::Cancelled);
+        assert_eq!(
+            s.get_case(retry.id).await.unwrap().unwrap().state,
+            CaseState::Cancelled
+        );
+        assert_eq!(counts(first).await, [("failed".to_string(), 1)], "{}", b.name);
+        // A third request makes a third attempt; the two earlier rows stay.
+        let (third, _) = create(s, sweep(cases(1))).await;
+        let again = s.sweep_cases(third).await.unwrap()[0].case.clone();
+        assert!(
+            again.id != retry.id && again.state == CaseState::Queued,
+            "{}",
+            b.name
+        );
+        assert_eq!(
+            s.get_case(retry.id).await.unwrap().unwrap().state,
+            CaseState::Cancelled
+        );
+        b.close().await;
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_repeated_idempotency_key_replays_or_conflicts() {
     for b in backends("idem").await {

@@ -209,20 +209,25 @@ impl Store for PgStore {
         .try_get("id")?;
         let mut cached = 0;
         for (position, case) in sweep.cases.iter().enumerate() {
-            // As in SQLite: a new key is queued, done stays done (cached),
-            // queued/running stay (withdrawing a pending cancellation),
-            // failed/cancelled go back to the queue.
+            // A failed or cancelled row with this key is retired: it keeps its
+            // history (and the sweeps that ended with it keep their outcome)
+            // under the key `key#id` (`rows::case_from_row` reads the key
+            // back), and a new row is queued. Otherwise a new key is queued,
+            // done stays done (cached), and queued/running stay as they are
+            // (a running case's pending cancellation is withdrawn).
+            sqlx::query(
+                "UPDATE cases SET case_key = case_key || '#' || id::text \
+                 WHERE case_key = $1 AND status IN ('failed', 'cancelled')",
+            )
+            .bind(&case.key)
+            .execute(&mut *tx)
+            .await?;
             let row = sqlx::query(
                 "INSERT INTO cases AS c (case_key, solver_version, params, status, max_attempts, created_at) \
                  VALUES ($1, $2, $3, 'queued', $4, $5) \
                  ON CONFLICT (case_key) DO UPDATE SET \
-                   attempts = CASE WHEN c.status IN ('failed', 'cancelled') THEN 0 ELSE c.attempts END, \
-                   not_before = CASE WHEN c.status IN ('failed', 'cancelled') THEN 0 ELSE c.not_before END, \
-                   last_error = CASE WHEN c.status IN ('failed', 'cancelled') THEN NULL ELSE c.last_error END, \
-                   finished_at = CASE WHEN c.status IN ('failed', 'cancelled') THEN NULL ELSE c.finished_at END, \
                    max_attempts = excluded.max_attempts, \
-                   cancel_requested = 0, \
-                   status = CASE WHEN c.status IN ('failed', 'cancelled') THEN 'queued' ELSE c.status END \
+                   cancel_requested = 0 \
                  RETURNING id, status",
             )
             .bind(&case.key)

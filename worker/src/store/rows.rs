@@ -58,7 +58,13 @@ pub(crate) fn case_from_row(r: &impl Columns) -> StoreResult<CaseRecord> {
     };
     Ok(CaseRecord {
         id: r.int("id")?,
-        key: r.text("case_key")?,
+        // A retired attempt's row stores `key#id` (`Store::create_sweep`).
+        key: r
+            .text("case_key")?
+            .split('#')
+            .next()
+            .unwrap_or_default()
+            .to_string(),
         solver_version: r.text("solver_version")?,
         params: json(&r.text("params")?, "case params")?,
         state: CaseState::parse(&r.text("status")?)?,

@@ -182,20 +182,25 @@ impl Store for SqliteStore {
         .try_get("id")?;
         let mut cached = 0;
         for (position, case) in sweep.cases.iter().enumerate() {
-            // New key: a queued case. Known key: done stays done (cached),
-            // queued/running stay as they are (a running case's pending
-            // cancellation is withdrawn), failed/cancelled go back to the queue.
+            // A failed or cancelled row with this key is retired: it keeps its
+            // history (and the sweeps that ended with it keep their outcome)
+            // under the key `key#id` (`rows::case_from_row` reads the key
+            // back), and a new row is queued. Otherwise a new key is queued,
+            // done stays done (cached), and queued/running stay as they are
+            // (a running case's pending cancellation is withdrawn).
+            sqlx::query(
+                "UPDATE cases SET case_key = case_key || '#' || id \
+                 WHERE case_key = ? AND status IN ('failed', 'cancelled')",
+            )
+            .bind(&case.key)
+            .execute(&mut *tx)
+            .await?;
             let row = sqlx::query(
                 "INSERT INTO cases (case_key, solver_version, params, status, max_attempts, created_at) \
                  VALUES (?, ?, ?, 'queued', ?, ?) \
                  ON CONFLICT (case_key) DO UPDATE SET \
-                   attempts = CASE WHEN cases.status IN ('failed', 'cancelled') THEN 0 ELSE cases.attempts END, \
-                   not_before = CASE WHEN cases.status IN ('failed', 'cancelled') THEN 0 ELSE cases.not_before END, \
-                   last_error = CASE WHEN cases.status IN ('failed', 'cancelled') THEN NULL ELSE cases.last_error END, \
-                   finished_at = CASE WHEN cases.status IN ('failed', 'cancelled') THEN NULL ELSE cases.finished_at END, \
                    max_attempts = excluded.max_attempts, \
-                   cancel_requested = 0, \
-                   status = CASE WHEN cases.status IN ('failed', 'cancelled') THEN 'queued' ELSE cases.status END \
+                   cancel_requested = 0 \
                  RETURNING id, status",
             )
             .bind(&case.key)

@@ -28,17 +28,17 @@ pub struct Args {
 
 /// A named case and the flags that reproduce it with `knotsweep run`.
 struct Job {
-    key: &'static str,
+    key: String,
     params: CaseParams,
     /// What `--initial-shape` holds, when the case starts from its own shape.
     start: Option<String>,
 }
 
-fn job(key: &'static str, f: impl FnOnce(&mut CaseParams)) -> Job {
+fn job(key: &str, f: impl FnOnce(&mut CaseParams)) -> Job {
     let mut params = CaseParams::default();
     f(&mut params);
     Job {
-        key,
+        key: key.to_string(),
         params,
         start: None,
     }
@@ -73,7 +73,7 @@ fn perturbed(key: &'static str, n: u32, seed: u64) -> Result<Job> {
         .collect();
     params.initial_shape = Some(points);
     Ok(Job {
-        key,
+        key: key.to_string(),
         params,
         start: Some(format!(
             "built knot, nodes moved by up to {PERTURBATION} h (seed {seed})"
@@ -134,27 +134,11 @@ fn jobs() -> Result<Vec<Job>> {
     ] {
         v.push(perturbed(key, n, seed)?);
     }
-    for (key, h) in [
-        ("h2.0", 2.0e-3),
-        ("h2.4", 2.4e-3),
-        ("h2.8", 2.8e-3),
-        ("h3.2", 3.2e-3),
-    ] {
-        v.push(job(key, |p| p.h = h));
-    }
-    for (key, mu) in [
-        ("mu0.1", 0.1),
-        ("mu0.2", 0.2),
-        ("mu0.3", 0.3),
-        ("mu0.4", 0.4),
-        ("mu0.5", 0.5),
-        ("mu0.6", 0.6),
-        ("mu0.7", 0.7),
-    ] {
-        v.push(job(key, |p| {
-            p.h = 3.4e-3;
-            p.mu = mu;
-        }));
+    // The service's presets of Figs 7 and 11 (Fig. 9's are the n jobs above).
+    for j in preset_jobs("fig7")?.into_iter().chain(preset_jobs("fig11")?) {
+        if !v.iter().any(|k| k.key == j.key) {
+            v.push(j);
+        }
     }
     v.push(job("dt_half", |p| p.dt = Some(p.time_step() / 2.0)));
     v.push(job("dt_fixed", |p| p.adaptive_dt = false));
@@ -163,6 +147,31 @@ fn jobs() -> Result<Vec<Job>> {
     v.push(job("speed_1mm", |p| p.pull_speed = 1e-3));
     v.push(job("contact_tight", |p| p.contact_tolerance /= 100.0));
     Ok(v)
+}
+
+/// The cases of the service's preset `name` (`knotsweep_server::spec`),
+/// keyed `{name}_{axis}{value}`; the default case is keyed `n3`.
+fn preset_jobs(name: &str) -> Result<Vec<Job>> {
+    let preset = knotsweep_server::spec::preset(name).with_context(|| format!("no preset {name}"))?;
+    let mut jobs = Vec::new();
+    for (axis, values) in &preset.grid {
+        for value in values {
+            let mut fields = preset.base_params.as_object().cloned().unwrap_or_default();
+            fields.insert(axis.clone(), value.clone());
+            let params: CaseParams = serde_json::from_value(serde_json::Value::Object(fields))?;
+            let key = if params == CaseParams::default() {
+                "n3".to_string()
+            } else {
+                format!("{name}_{axis}{value}")
+            };
+            jobs.push(Job {
+                key,
+                params,
+                start: None,
+            });
+        }
+    }
+    Ok(jobs)
 }
 
 /// The `knotsweep run` command of a job.
@@ -229,7 +238,7 @@ pub fn run(args: Args) -> Result<()> {
         jobs.par_iter()
             .map(|j| {
                 let r = protocol::run(&j.params, &mut |_| true);
-                tracing::info!(case = j.key, status = ?r.status, inversion = ?r.inversion.map(|i| i.l_k_bar), wall = r.stats.wall_time, "case done");
+                tracing::info!(case = j.key.as_str(), status = ?r.status, inversion = ?r.inversion.map(|i| i.l_k_bar), wall = r.stats.wall_time, "case done");
                 bar.inc(1);
                 r
             })
@@ -403,9 +412,9 @@ fn report(get: &Lookup, simplified: &[(u32, Option<f64>)]) -> Result<String> {
             .iter()
             .all(|(_, b)| b.is_some_and(|(e, p)| near(e, PAPER_EPSILON) && near(p, PAPER_PHI))),
     ));
-    let hs: Vec<Option<f64>> = ["n3", "h2.0", "h2.4", "h2.8", "h3.2"]
+    let hs: Vec<Option<f64>> = preset_jobs("fig7")?
         .iter()
-        .map(|k| get(k).and_then(|(_, r)| inversion(r)))
+        .map(|j| get(&j.key).and_then(|(_, r)| inversion(r)))
         .collect();
     let (spread_text, spread_ok) = if hs.iter().all(Option::is_some) {
         let v: Vec<f64> = hs.iter().flatten().copied().collect();
@@ -427,18 +436,18 @@ fn report(get: &Lookup, simplified: &[(u32, Option<f64>)]) -> Result<String> {
     };
     rows.push((
         "n = 3, h = 1.6 ... 3.2 mm: critical l_k bar nearly the same (spread <= 15 %)".into(),
-        "knotsweep run --h 1.6e-3 / 2.0e-3 / 2.4e-3 / 2.8e-3 / 3.2e-3".into(),
+        "knotsweep sweep --preset fig7".into(),
         spread_text,
         spread_ok,
     ));
-    let mus: Vec<Option<f64>> = ["mu0.1", "mu0.2", "mu0.3", "mu0.4", "mu0.5", "mu0.6", "mu0.7"]
+    let mus: Vec<Option<f64>> = preset_jobs("fig11")?
         .iter()
-        .map(|k| get(k).and_then(|(_, r)| inversion(r)))
+        .map(|j| get(&j.key).and_then(|(_, r)| inversion(r)))
         .collect();
     let mu_ok = mus.iter().all(Option::is_some) && mus.windows(2).all(|w| w[1] >= w[0]) && mus[6] > mus[0];
     rows.push((
         "n = 3, h = 3.4 mm, mu = 0.1 ... 0.7: critical l_k bar grows with mu".into(),
-        "knotsweep run --h 3.4e-3 --mu 0.1 / ... / 0.7".into(),
+        "knotsweep sweep --preset fig11".into(),
         mus.iter()
             .map(|m| m.map_or("-".to_string(), |x| format!("{x:.1}")))
             .collect::<Vec<_>>()

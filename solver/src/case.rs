@@ -4,6 +4,7 @@ pub use crate::contact::FrictionLaw;
 use crate::contact::broad_phase::neighbour_gap;
 use crate::contact::segment::closest_points;
 use crate::knot::{self, KnotError, KnotShape, KnotSpec};
+pub use crate::protocol::Protocol;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -48,6 +49,9 @@ pub struct CaseParams {
     pub density: f64,
     /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
     pub pull_speed: f64,
+    /// How the pull is scheduled: `reference` (at `pull_speed` throughout) or
+    /// `adaptive` (fast far from the snap, slow through it).
+    pub protocol: Protocol,
     /// Time step (s), the largest one with `adaptive_dt`; `None`: the automatic
     /// step of [`CaseParams::time_step`] (0.5 ms at L = 1 m, K = 301).
     pub dt: Option<f64>,
@@ -100,6 +104,7 @@ impl Default for CaseParams {
             poisson_ratio: 0.5,
             density: 1000.0,
             pull_speed: 3e-3,
+            protocol: Protocol::default(),
             dt: None,
             adaptive_dt: true,
             contact_tolerance: 1e-6,
@@ -200,6 +205,10 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "pull_speed",
         doc: "Pulling speed of each clamp (m/s): 1e-5..=1.",
+    },
+    Parameter {
+        name: "protocol",
+        doc: "How the clamps move: \"reference\" (default) pulls at pull_speed throughout, as in the paper; \"adaptive\" ramps up to 8 times pull_speed while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar, and once a snap is detected goes back to the checkpoint 8 before it, lets the knot settle and pulls through the snap at twice pull_speed (about 3 times faster; within 1 % of the reference for clean snaps, not for the high-friction cases at h = 3.4 mm; BENCHMARKS.md).",
     },
     Parameter {
         name: "dt",

@@ -94,15 +94,11 @@ pub enum WorldError {
 #[derive(Clone)]
 pub struct World {
     pub rods: Vec<Rod>,
-    steppers: Vec<Stepper>,
+    /// Per rod (same order as `rods`): stepper, numbering and force buffers.
+    bodies: Vec<Body>,
     pub env: Environment,
     pub contact: ContactOptions,
     pub counters: Counters,
-    /// Constant external loads per rod (one entry per DOF), added to F^ext.
-    pub loads: Vec<Vec<f64>>,
-    node_offset: Vec<usize>,
-    /// First global edge id of each rod (twist DOFs for rolling).
-    edge_offset: Vec<usize>,
     spin_inv_inertia: Vec<f64>,
     spin_free: Vec<f64>,
     broad: BroadPhase,
@@ -116,9 +112,22 @@ pub struct World {
     warm: Vec<Vector3<f64>>,
     inv_mass: Vec<f64>,
     v_free: Vec<Vector3<f64>>,
-    forces: Vec<Vec<f64>>,
-    grad: Vec<Vec<f64>>,
     saved: Saved,
+}
+
+/// A rod's stepper, its place in the world's numbering and its force buffers.
+#[derive(Clone)]
+struct Body {
+    stepper: Stepper,
+    /// Global ids of its first node and first edge (twist DOF, for rolling).
+    first_node: usize,
+    first_edge: usize,
+    /// Constant external load (one entry per DOF), added to F^ext.
+    load: Vec<f64>,
+    /// F^ext of the current step: load, gravity and contact forces.
+    force: Vec<f64>,
+    /// Elastic gradient, when the stepper has none cached.
+    grad: Vec<f64>,
 }
 
 /// A checkpoint of the world: every rod's state and the contact warm start.
@@ -132,16 +141,23 @@ struct Saved {
 impl World {
     /// A world of `rods` under `env`, each stepped with `newton`.
     pub fn new(rods: Vec<Rod>, env: Environment, contact: ContactOptions, newton: NewtonOptions) -> Self {
-        let steppers = rods.iter().map(|r| Stepper::new(r, newton)).collect();
-        let mut node_offset = Vec::with_capacity(rods.len());
-        let mut edge_offset = Vec::with_capacity(rods.len());
         let (mut total, mut total_edges) = (0, 0);
-        for r in &rods {
-            node_offset.push(total);
-            edge_offset.push(total_edges);
-            total += r.nodes();
-            total_edges += r.edges();
-        }
+        let bodies = rods
+            .iter()
+            .map(|r| {
+                let body = Body {
+                    stepper: Stepper::new(r, newton),
+                    first_node: total,
+                    first_edge: total_edges,
+                    load: vec![0.0; r.ndof()],
+                    force: vec![0.0; r.ndof()],
+                    grad: vec![0.0; r.ndof()],
+                };
+                total += r.nodes();
+                total_edges += r.edges();
+                body
+            })
+            .collect();
         let gaps = rods
             .iter()
             .map(|r| {
@@ -149,18 +165,12 @@ impl World {
                 neighbour_gap(2.0 * r.section.radius, shortest)
             })
             .collect();
-        let forces = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
-        let loads = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
-        let grad = rods.iter().map(|r| vec![0.0; r.ndof()]).collect();
         Self {
             rods,
-            steppers,
+            bodies,
             env,
             contact,
             counters: Counters::default(),
-            loads,
-            node_offset,
-            edge_offset,
             spin_inv_inertia: vec![0.0; total_edges],
             spin_free: vec![0.0; total_edges],
             broad: BroadPhase::new(),
@@ -174,8 +184,6 @@ impl World {
             warm: Vec::new(),
             inv_mass: vec![0.0; total],
             v_free: vec![Vector3::zeros(); total],
-            forces,
-            grad,
             saved: Saved::default(),
         }
     }
@@ -189,7 +197,7 @@ impl World {
         }
         self.saved.warm_ids.clone_from(&self.warm_ids);
         self.saved.warm_forces.clone_from(&self.warm_forces);
-        self.steppers.iter_mut().for_each(Stepper::checkpoint);
+        self.bodies.iter_mut().for_each(|b| b.stepper.checkpoint());
     }
 
     /// Returns to the last [`World::checkpoint`] (to redo a step differently).
@@ -199,7 +207,7 @@ impl World {
         }
         self.warm_ids.clone_from(&self.saved.warm_ids);
         self.warm_forces.clone_from(&self.saved.warm_forces);
-        self.steppers.iter_mut().for_each(Stepper::rollback);
+        self.bodies.iter_mut().for_each(|b| b.stepper.rollback());
     }
 
     /// The largest rod radius (the scale of contact tolerances).
@@ -209,7 +217,12 @@ impl World {
 
     /// The stepper of rod `i` (for its clamp reactions).
     pub fn stepper(&self, i: usize) -> &Stepper {
-        &self.steppers[i]
+        &self.bodies[i].stepper
+    }
+
+    /// Rod `i`'s constant external load (one entry per DOF), added to F^ext.
+    pub fn load_mut(&mut self, i: usize) -> &mut [f64] {
+        &mut self.bodies[i].load
     }
 
     /// The contacts found at the start of the last step.
@@ -226,8 +239,8 @@ impl World {
     pub fn step(&mut self, dt: f64) -> Result<WorldStepReport, WorldError> {
         self.counters.steps += 1;
         let mut report = WorldStepReport::default();
-        for (f, l) in self.forces.iter_mut().zip(&self.loads) {
-            f.copy_from_slice(l);
+        for body in &mut self.bodies {
+            body.force.copy_from_slice(&body.load);
         }
         if self.contact.enabled {
             let mut detection = self.counters.detection;
@@ -279,7 +292,7 @@ impl World {
                 continue;
             }
             let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
-            let (oa, ob) = (self.node_offset[sa.body], self.node_offset[sb.body]);
+            let (oa, ob) = (self.bodies[sa.body].first_node, self.bodies[sb.body].first_node);
             let nodes = [oa + sa.index, oa + sa.index + 1, ob + sb.index, ob + sb.index + 1];
             if let Some(mut c) =
                 ContactPoint::from_pair(nodes, &p.closest, sa.radius + sb.radius, self.contact.friction)
@@ -289,8 +302,8 @@ impl World {
                 }
                 if self.contact.rolling {
                     let (ea, eb) = (
-                        self.edge_offset[sa.body] + sa.index,
-                        self.edge_offset[sb.body] + sb.index,
+                        self.bodies[sa.body].first_edge + sa.index,
+                        self.bodies[sb.body].first_edge + sb.index,
                     );
                     let lever = |seg: &Segment| {
                         let t = (seg.b - seg.a).normalize();
@@ -310,16 +323,16 @@ impl World {
     }
 
     fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) {
-        for (b, rod) in self.rods.iter().enumerate() {
-            let grad: &[f64] = match self.steppers[b].elastic_gradient(rod) {
+        for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
+            let grad: &[f64] = match body.stepper.elastic_gradient(rod) {
                 Some(g) => g,
                 None => {
-                    energies::evaluate(rod, Terms::ALL, &mut self.grad[b], None);
-                    &self.grad[b]
+                    energies::evaluate(rod, Terms::ALL, &mut body.grad, None);
+                    &body.grad
                 }
             };
-            let force = &mut self.forces[b];
-            force.copy_from_slice(&self.loads[b]);
+            let force = &mut body.force;
+            force.copy_from_slice(&body.load);
             gravity::add(rod, &self.env.gravity, force);
             // A free DOF's contact-free velocity, v + dt M^-1 (F - grad E),
             // damped, and its effective inverse mass (the same rule as the stepper's).
@@ -328,7 +341,7 @@ impl World {
                 let m = rod.mass[d];
                 (damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / m), damp / m)
             };
-            let off = self.node_offset[b];
+            let off = body.first_node;
             for i in 0..rod.nodes() {
                 let d = node_dof(i);
                 let (v, inv_mass) = if rod.fixed[d] || rod.fixed[d + 1] || rod.fixed[d + 2] {
@@ -344,7 +357,7 @@ impl World {
             if self.contact.rolling {
                 for e in 0..rod.edges() {
                     let d = theta_dof(e);
-                    let k = self.edge_offset[b] + e;
+                    let k = body.first_edge + e;
                     (self.spin_free[k], self.spin_inv_inertia[k]) = if rod.fixed[d] {
                         (rod.prescribed_velocity[d], 0.0)
                     } else {
@@ -352,7 +365,7 @@ impl World {
                     };
                 }
             }
-            force.copy_from_slice(&self.loads[b]);
+            force.copy_from_slice(&body.load);
         }
         // Warm start from the previous step's forces on the same segment pairs.
         self.warm.clear();
@@ -394,21 +407,18 @@ impl World {
             .filter(|(f, c)| f.dot(&c.normal) > 0.0)
             .count();
         let node_forces = self.gauss_seidel.node_forces();
-        for (b, rod) in self.rods.iter().enumerate() {
-            let off = self.node_offset[b];
+        for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
+            let off = body.first_node;
             for i in 0..rod.nodes() {
                 let d = node_dof(i);
-                for (f, n) in self.forces[b][d..d + 3]
-                    .iter_mut()
-                    .zip(node_forces[off + i].iter())
-                {
+                for (f, n) in body.force[d..d + 3].iter_mut().zip(node_forces[off + i].iter()) {
                     *f += n;
                 }
             }
             if self.contact.rolling {
                 let torques = self.gauss_seidel.spin_torques();
                 for e in 0..rod.edges() {
-                    self.forces[b][theta_dof(e)] += torques[self.edge_offset[b] + e];
+                    body.force[theta_dof(e)] += torques[body.first_edge + e];
                 }
             }
         }
@@ -420,12 +430,13 @@ impl World {
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
-        for (b, (rod, stepper)) in self.rods.iter_mut().zip(&mut self.steppers).enumerate() {
+        for (b, (rod, body)) in self.rods.iter_mut().zip(&mut self.bodies).enumerate() {
             if rod.fixed.iter().all(|f| *f) && rod.prescribed_velocity.iter().all(|v| *v == 0.0) {
                 continue;
             }
-            let r: StepReport = stepper
-                .step(rod, &self.env, Some(&self.forces[b]), dt)
+            let r: StepReport = body
+                .stepper
+                .step(rod, &self.env, Some(&body.force), dt)
                 .map_err(|source| WorldError::Step { rod: b, source })?;
             report.newton_iterations += r.newton_iterations;
             report.substeps += r.substeps;

@@ -284,7 +284,7 @@ pub fn capstan(mu: f64, phi: f64, law: FrictionLaw) -> Result<(f64, f64), WorldE
     for step in 0..steps {
         let scale = ((step + 1) as f64 / ramp as f64).min(1.0);
         for c in 0..3 {
-            world.loads[0][node_dof(0) + c] = scale * load * load_dir[c];
+            world.load_mut(0)[node_dof(0) + c] = scale * load * load_dir[c];
         }
         if step == ramp {
             world.rods[0].move_clamp(End::Finish, pull_dir * speed);

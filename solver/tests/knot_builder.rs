@@ -570,3 +570,28 @@ fn flipping_one_braid_crossing_changes_the_determinant() {
         assert_ne!(det, expected_determinant(n));
     }
 }
+
+/// Defect 15.11: the coarsest mesh the builder accepts for n = 3 (K = 158:
+/// edges of at most 4h) holds its knot type through a whole pull at
+/// mu = 0.2, and one node fewer is refused with the minimum in the message.
+#[test]
+fn the_coarsest_accepted_mesh_keeps_its_knot_through_the_pull() {
+    use solver::case::CaseParams;
+    use solver::protocol::{self, Status};
+    let coarse = CaseParams {
+        nodes: 158,
+        mu: 0.2,
+        ..CaseParams::default()
+    };
+    let report = protocol::run(&coarse, &mut |_| true);
+    assert_eq!(report.status, Status::Completed, "{}", report.reason);
+    assert_eq!(report.determinant_final, Some(7));
+    assert!(report.inversion.is_some());
+    let errors = CaseParams { nodes: 157, ..coarse }.validate().unwrap_err();
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.field == "nodes" && e.reason.contains("need 158")),
+        "{errors:?}"
+    );
+}

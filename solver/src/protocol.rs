@@ -365,6 +365,27 @@ impl Stage {
     }
 }
 
+/// A fast approach's checkpoints and where the next is due.
+struct Checkpoints {
+    list: VecDeque<Checkpoint>,
+    next: f64,
+}
+
+impl Checkpoints {
+    /// The latest checkpoint at or before `l_k_bar` along the pull (at l_k
+    /// bar >= it), else the earliest kept; the list is emptied.
+    fn before(&mut self, l_k_bar: f64) -> Option<Checkpoint> {
+        let at = self
+            .list
+            .iter()
+            .rposition(|c| c.l_k_bar >= l_k_bar)
+            .or((!self.list.is_empty()).then_some(0))?;
+        let c = self.list.swap_remove_back(at);
+        self.list.clear();
+        c
+    }
+}
+
 /// The state a fast pull can return to.
 struct Checkpoint {
     l_k_bar: f64,
@@ -506,22 +527,12 @@ impl<'a> Case<'a> {
             fast_snap: None,
         };
         self.enter(&mut pull, stage, start_l_k_bar);
-        let mut checkpoints: VecDeque<Checkpoint> = VecDeque::with_capacity(CHECKPOINTS);
-        let mut next_checkpoint = start_l_k_bar;
+        let mut saved = Checkpoints {
+            list: VecDeque::with_capacity(CHECKPOINTS),
+            next: start_l_k_bar,
+        };
         loop {
-            let (step, dt) = match self.clock.advance(&mut self.world) {
-                Ok(s) => (s.report, s.dt),
-                Err(e) => return Err(Ending::new(Status::Diverged, e.to_string())),
-            };
-            pull.time += dt;
-            pull.peak_kinetic_energy = pull.peak_kinetic_energy.max(self.world.rods[0].kinetic_energy());
-            let stats = &mut self.report.stats;
-            stats.steps += 1;
-            stats.newton_iterations += u64::from(step.newton_iterations);
-            stats.contact_sweeps += step.contact_sweeps as u64;
-            self.penetration(step.max_penetration, || {
-                format!("at l_k bar {:.2}", self.l_k_bar())
-            })?;
+            let (step, dt) = self.step(&mut pull)?;
             let l_k_bar = self.l_k_bar();
             if l_k_bar > pull.next_sample {
                 continue;
@@ -544,59 +555,13 @@ impl<'a> Case<'a> {
             if !observer(&progress, &points) {
                 return Err(Ending::new(Status::Cancelled, Status::Cancelled.to_string()));
             }
-            match (pull.stage, self.report.inversion) {
-                (Stage::Approach, Some(inv)) => {
-                    let back = checkpoints
-                        .iter()
-                        .rev()
-                        .find(|c| c.l_k_bar >= inv.l_k_bar + RESTART_BEFORE)
-                        .or(checkpoints.front());
-                    if let Some(c) = back {
-                        self.restore(c, &mut pull)?;
-                        pull.fast_snap = Some(inv.l_k_bar);
-                        checkpoints.clear();
-                        continue;
-                    }
-                }
-                (Stage::Approach, None) if l_k_bar <= next_checkpoint => {
-                    if checkpoints.len() == CHECKPOINTS {
-                        checkpoints.pop_front();
-                    }
-                    checkpoints.push_back(Checkpoint {
-                        l_k_bar,
-                        world: self.world.clone(),
-                        clock: self.clock.clone(),
-                        pull: pull.clone(),
-                        series: self.report.series.len(),
-                        frames: self.report.frames.len(),
-                    });
-                    next_checkpoint = l_k_bar - CHECKPOINT_SPACING;
-                }
-                (Stage::Snap, Some(inv)) if l_k_bar <= inv.l_k_bar - SLOW_AFTER => {
-                    self.enter(&mut pull, Stage::After, l_k_bar);
-                }
-                (Stage::Snap, None) if pull.fast_snap.is_some_and(|f| l_k_bar < f - FALSE_ALARM) => {
-                    // The fast pull's snap was its own swinging: approach again.
-                    self.enter(&mut pull, Stage::Approach, l_k_bar);
-                    next_checkpoint = l_k_bar;
-                }
-                _ => self.drive(&pull, l_k_bar),
+            if self.schedule(&mut pull, &mut saved, l_k_bar)? {
+                continue;
             }
             let tight = self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
             if l_k_bar <= stop_l || tight {
-                // A fast approach that ends without a snap may have passed
-                // one its swinging hid: the end of the pull is redone slowly.
-                if pull.stage == Stage::Approach {
-                    let back = checkpoints
-                        .iter()
-                        .rev()
-                        .find(|c| c.l_k_bar >= l_k_bar + END_REVIEW)
-                        .or(checkpoints.front());
-                    if let Some(c) = back {
-                        self.restore(c, &mut pull)?;
-                        checkpoints.clear();
-                        continue;
-                    }
+                if self.review_end(&mut pull, &mut saved, l_k_bar)? {
+                    continue;
                 }
                 break;
             }
@@ -607,6 +572,78 @@ impl<'a> Case<'a> {
         let at = self.l_k_bar();
         self.report.frames.push(frame(&self.world, "final", at));
         Ok(())
+    }
+
+    /// One world step of the pull, counted; an `Ending` when it diverges or
+    /// penetrates. Returns the step's report and size.
+    fn step(&mut self, pull: &mut Pull) -> Result<(WorldStepReport, f64), Ending> {
+        let (step, dt) = match self.clock.advance(&mut self.world) {
+            Ok(s) => (s.report, s.dt),
+            Err(e) => return Err(Ending::new(Status::Diverged, e.to_string())),
+        };
+        pull.time += dt;
+        pull.peak_kinetic_energy = pull.peak_kinetic_energy.max(self.world.rods[0].kinetic_energy());
+        let stats = &mut self.report.stats;
+        stats.steps += 1;
+        stats.newton_iterations += u64::from(step.newton_iterations);
+        stats.contact_sweeps += step.contact_sweeps as u64;
+        self.penetration(step.max_penetration, || {
+            format!("at l_k bar {:.2}", self.l_k_bar())
+        })?;
+        Ok((step, dt))
+    }
+
+    /// The adaptive protocol's moves after a sample at `l_k_bar`
+    /// ([`Protocol::Adaptive`]): back to a checkpoint when the fast approach
+    /// sees a snap (returns `true`), checkpoints while fast, fast again past
+    /// the snap or after a false alarm; otherwise the clamps' speed.
+    fn schedule(&mut self, pull: &mut Pull, saved: &mut Checkpoints, l_k_bar: f64) -> Result<bool, Ending> {
+        match (pull.stage, self.report.inversion) {
+            (Stage::Approach, Some(inv)) => {
+                if let Some(c) = saved.before(inv.l_k_bar + RESTART_BEFORE) {
+                    self.restore(&c, pull)?;
+                    pull.fast_snap = Some(inv.l_k_bar);
+                    return Ok(true);
+                }
+            }
+            (Stage::Approach, None) if l_k_bar <= saved.next => {
+                if saved.list.len() == CHECKPOINTS {
+                    saved.list.pop_front();
+                }
+                saved.list.push_back(Checkpoint {
+                    l_k_bar,
+                    world: self.world.clone(),
+                    clock: self.clock.clone(),
+                    pull: pull.clone(),
+                    series: self.report.series.len(),
+                    frames: self.report.frames.len(),
+                });
+                saved.next = l_k_bar - CHECKPOINT_SPACING;
+            }
+            (Stage::Snap, Some(inv)) if l_k_bar <= inv.l_k_bar - SLOW_AFTER => {
+                self.enter(pull, Stage::After, l_k_bar);
+            }
+            (Stage::Snap, None) if pull.fast_snap.is_some_and(|f| l_k_bar < f - FALSE_ALARM) => {
+                // The fast pull's snap was its own swinging: approach again.
+                self.enter(pull, Stage::Approach, l_k_bar);
+                saved.next = l_k_bar;
+            }
+            _ => self.drive(pull, l_k_bar),
+        }
+        Ok(false)
+    }
+
+    /// At the stop condition: a fast approach that ends without a snap may
+    /// have passed one its swinging hid, so the end of the pull is redone
+    /// slowly from a checkpoint (returns `true`).
+    fn review_end(&mut self, pull: &mut Pull, saved: &mut Checkpoints, l_k_bar: f64) -> Result<bool, Ending> {
+        if pull.stage != Stage::Approach {
+            return Ok(false);
+        }
+        match saved.before(l_k_bar + END_REVIEW) {
+            Some(c) => self.restore(&c, pull).map(|()| true),
+            None => Ok(false),
+        }
     }
 
     /// Enters `stage` at `l_k_bar`: the clamps at its speed, the contact

@@ -348,11 +348,12 @@ impl Stage {
     /// Clamp speed over `pull_speed`, `pulled` (in l_k bar) into the stage:
     /// the fast stages ramp up from the snap speed over `RAMP`.
     fn speed(self, pulled: f64) -> f64 {
-        let (fast, snap) = (FAST_FACTOR, SNAP_FACTOR);
         match self {
             Stage::Reference => 1.0,
-            Stage::Snap => snap,
-            Stage::Approach | Stage::After => snap + (fast - snap) * (pulled / RAMP).clamp(0.0, 1.0),
+            Stage::Snap => SNAP_FACTOR,
+            Stage::Approach | Stage::After => {
+                SNAP_FACTOR + (FAST_FACTOR - SNAP_FACTOR) * (pulled / RAMP).clamp(0.0, 1.0)
+            }
         }
     }
 
@@ -375,14 +376,8 @@ impl Checkpoints {
     /// The latest checkpoint at or before `l_k_bar` along the pull (at l_k
     /// bar >= it), else the earliest kept; the list is emptied.
     fn before(&mut self, l_k_bar: f64) -> Option<Checkpoint> {
-        let at = self
-            .list
-            .iter()
-            .rposition(|c| c.l_k_bar >= l_k_bar)
-            .or((!self.list.is_empty()).then_some(0))?;
-        let c = self.list.swap_remove_back(at);
-        self.list.clear();
-        c
+        let at = self.list.iter().rposition(|c| c.l_k_bar >= l_k_bar).unwrap_or(0);
+        self.list.drain(..).nth(at)
     }
 }
 
@@ -601,7 +596,7 @@ impl<'a> Case<'a> {
         match (pull.stage, self.report.inversion) {
             (Stage::Approach, Some(inv)) => {
                 if let Some(c) = saved.before(inv.l_k_bar + RESTART_BEFORE) {
-                    self.restore(&c, pull)?;
+                    self.restore(c, pull)?;
                     pull.fast_snap = Some(inv.l_k_bar);
                     return Ok(true);
                 }
@@ -641,7 +636,7 @@ impl<'a> Case<'a> {
             return Ok(false);
         }
         match saved.before(l_k_bar + END_REVIEW) {
-            Some(c) => self.restore(&c, pull).map(|()| true),
+            Some(c) => self.restore(c, pull).map(|()| true),
             None => Ok(false),
         }
     }
@@ -666,10 +661,10 @@ impl<'a> Case<'a> {
     /// the series and frames after it are dropped, and the knot settles
     /// with the clamps held (the fast pull leaves it swinging) before the
     /// snap stage starts.
-    fn restore(&mut self, c: &Checkpoint, pull: &mut Pull) -> Result<(), Ending> {
-        self.world = c.world.clone();
-        self.clock = c.clock.clone();
-        *pull = c.pull.clone();
+    fn restore(&mut self, c: Checkpoint, pull: &mut Pull) -> Result<(), Ending> {
+        self.world = c.world;
+        self.clock = c.clock;
+        *pull = c.pull;
         self.report.series.truncate(c.series);
         self.report.frames.truncate(c.frames);
         self.report.inversion = None;

@@ -1,0 +1,33 @@
+//! The pull protocols (`solver::protocol::Protocol`): the adaptive pull finds
+//! the reference pull's inversion in far fewer steps.
+use solver::case::{CaseParams, Protocol};
+use solver::protocol::{self, Status};
+
+/// On the coarsest n = 3 mesh (K = 158, mu = 0.2, a clean snap), the
+/// adaptive pull's inversion is within 1 % of the reference pull's, and it
+/// takes under a third of its steps (BENCHMARKS.md compares the presets' cases at K = 301).
+#[test]
+fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
+    let run = |protocol| {
+        let params = CaseParams {
+            nodes: 158,
+            mu: 0.2,
+            protocol,
+            ..CaseParams::default()
+        };
+        let report = protocol::run(&params, &mut |_| true);
+        assert_eq!(report.status, Status::Completed, "{}", report.reason);
+        let inversion = report.inversion.expect("an inversion").l_k_bar;
+        (inversion, report.stats.steps + report.stats.relax_steps)
+    };
+    let (reference, reference_steps) = run(Protocol::Reference);
+    let (adaptive, adaptive_steps) = run(Protocol::Adaptive);
+    assert!(
+        (adaptive - reference).abs() <= 0.01 * reference,
+        "adaptive {adaptive} against reference {reference}"
+    );
+    assert!(
+        3 * adaptive_steps < reference_steps,
+        "{adaptive_steps} steps against {reference_steps}"
+    );
+}

@@ -19,6 +19,8 @@
 pub mod postgres;
 mod rows;
 pub mod sqlite;
+#[cfg(test)]
+mod testing;
 
 use async_trait::async_trait;
 use serde::{Deserialize, Serialize};
@@ -459,6 +461,11 @@ pub fn now_ms() -> i64 {
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_millis() as i64)
         .unwrap_or(0)
+}
+
+/// A duration in whole milliseconds (saturating), as the tables store them.
+fn ms(d: Duration) -> i64 {
+    d.as_millis().min(i64::MAX as u128) as i64
 }
 
 #[cfg(test)]

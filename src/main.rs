@@ -1,6 +1,7 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
 mod bench_queue;
+mod bench_soak;
 mod queue_args;
 mod reproduce;
 mod run;
@@ -47,6 +48,8 @@ enum Command {
     Sweep(sweep::Args),
     /// Measure the queue's throughput (claims and completions of no-op cases).
     BenchQueue(bench_queue::Args),
+    /// Soak the service: many clients submitting, polling and cancelling for a while.
+    BenchSoak(bench_soak::Args),
 }
 
 fn main() {
@@ -66,6 +69,7 @@ fn main() {
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::BenchQueue(args) => bench_queue::run(args),
+        Command::BenchSoak(args) => bench_soak::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -287,6 +287,11 @@ async fn sweeps_are_listed_a_page_at_a_time() {
     assert!(r.headers().get("link").is_none());
     let page: Value = r.json().await.unwrap();
     assert_eq!(page[0]["id"], ids[2]);
+    assert_eq!(
+        page[0]["counts"],
+        json!({"queued": 1}),
+        "a later page carries its sweeps' counts"
+    );
     for bad in ["limit=0", "limit=5000", "limit=x"] {
         let (status, body) = get(&c, &format!("{url}/api/sweeps?{bad}")).await;
         assert_eq!(status, StatusCode::BAD_REQUEST, "{bad}: {body}");
@@ -317,4 +322,34 @@ async fn finished_cases_carry_no_stale_progress_and_done_sweeps_no_eta() {
         assert!(detail["progress_detail"].is_null(), "{detail:#}");
     }
     server.shutdown().await.unwrap();
+}
+
+/// The soak benchmark, shortened: 10 clients replaying 6 minutes of submits,
+/// polls and cancels against stand-in workers lose and duplicate no sweep or
+/// case (the full run, with its memory check, is in BENCHMARKS.md).
+#[test]
+fn a_short_soak_loses_and_duplicates_nothing() {
+    let out = Command::new(BIN)
+        .args([
+            "bench-soak",
+            "--clients",
+            "10",
+            "--minutes",
+            "6",
+            "--no-memory-check",
+        ])
+        .env("RUST_LOG", "error")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("20 sweeps (4 cancelled)"), "{stdout}");
+    assert!(
+        stdout.contains("no accepted sweep or case lost or duplicated"),
+        "{stdout}"
+    );
 }

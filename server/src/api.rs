@@ -369,8 +369,9 @@ struct Page {
 #[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", params(Page),
     responses((status = 200, body = Vec<SweepSummary>), (status = 400, body = ErrorBody)))]
 async fn list_sweeps(State(app): State<App>, page: PageQuery) -> Result<Response, ApiError> {
-    let page = page_of(page)?;
-    paginate(app.core.list_sweeps().await?, page, "/api/sweeps")
+    let (limit, offset) = page_of(page)?;
+    let (sweeps, total) = app.core.list_sweeps(limit, offset).await?;
+    Ok(page_response(sweeps, total, (limit, offset), "/api/sweeps"))
 }
 
 type PageQuery = Result<axum::extract::Query<Page>, axum::extract::rejection::QueryRejection>;
@@ -389,13 +390,20 @@ fn page_of(page: PageQuery) -> Result<(usize, usize), ApiError> {
 }
 
 /// One page of `all` as JSON, with `X-Total-Count` and a `Link: rel="next"`.
-fn paginate<T: serde::Serialize>(
-    all: Vec<T>,
-    (limit, offset): (usize, usize),
-    path: &str,
-) -> Result<Response, ApiError> {
+fn paginate<T: serde::Serialize>(all: Vec<T>, (limit, offset): (usize, usize), path: &str) -> Response {
     let total = all.len();
     let items: Vec<T> = all.into_iter().skip(offset).take(limit).collect();
+    page_response(items, total, (limit, offset), path)
+}
+
+/// `items`, the page at `offset` of a list of `total`, as JSON with
+/// `X-Total-Count` and a `Link: rel="next"` when more follow.
+fn page_response<T: serde::Serialize>(
+    items: Vec<T>,
+    total: usize,
+    (limit, offset): (usize, usize),
+    path: &str,
+) -> Response {
     let mut response = Json(items).into_response();
     let headers = response.headers_mut();
     headers.insert("x-total-count", HeaderValue::from(total));
@@ -403,7 +411,7 @@ fn paginate<T: serde::Serialize>(
         let next = format!("<{path}?limit={limit}&offset={}>; rel=\"next\"", offset + limit);
         headers.insert(header::LINK, HeaderValue::from_str(&next).expect("ascii"));
     }
-    Ok(response)
+    response
 }
 
 /// A sweep's cases in grid order: parameters, status, progress, inversion (paginated).
@@ -415,7 +423,7 @@ fn paginate<T: serde::Serialize>(
 async fn sweep_cases(State(app): State<App>, Id(id): Id, page: PageQuery) -> Result<Response, ApiError> {
     let page = page_of(page)?;
     let detail = app.core.sweep(id).await?;
-    paginate(detail.cases, page, &format!("/api/sweeps/{id}/cases"))
+    Ok(paginate(detail.cases, page, &format!("/api/sweeps/{id}/cases")))
 }
 
 /// A sweep: counts per status, progress, ETA (its cases: `/api/sweeps/{id}/cases`).

@@ -42,12 +42,13 @@ pub struct Core {
     limits: Limits,
     pool: Option<PoolHandle>,
     started: Instant,
-    /// The simplified model's snap by (n, h bits): computed once (about 0.4 s each).
+    /// The simplified model's snap by (n, h bits): computed once (about 0.4 s
+    /// each), concurrent first requests waiting on the same computation.
     simplified: Arc<Mutex<SimplifiedSnaps>>,
 }
 
-/// The simplified model's snaps computed so far, by (n, bits of h).
-type SimplifiedSnaps = HashMap<(u32, u64), Option<f64>>;
+/// The simplified model's snaps, computed or under way, by (n, bits of h).
+type SimplifiedSnaps = HashMap<(u32, u64), Arc<tokio::sync::OnceCell<Option<f64>>>>;
 
 impl Core {
     pub fn new(store: Arc<dyn Store>, limits: Limits, pool: Option<PoolHandle>) -> Self {
@@ -174,16 +175,28 @@ impl Core {
         })
     }
 
-    pub async fn list_sweeps(&self) -> Result<Vec<SweepSummary>, CoreError> {
-        let sweeps = self.store.list_sweeps().await?;
+    /// At most `limit` sweeps from the `offset`-th, oldest first, with their
+    /// counts per status, and the number of sweeps: one page read from the
+    /// store, so a request's memory is bounded by the page, not the history.
+    pub async fn list_sweeps(
+        &self,
+        limit: usize,
+        offset: usize,
+    ) -> Result<(Vec<SweepSummary>, usize), CoreError> {
+        let total = self.store.count_sweeps().await?;
+        let sweeps = self.store.list_sweeps(limit as i64, offset as i64).await?;
+        let (Some(first), Some(last)) = (sweeps.first(), sweeps.last()) else {
+            return Ok((Vec::new(), total as usize));
+        };
         let mut counts: BTreeMap<i64, BTreeMap<String, i64>> = BTreeMap::new();
-        for (id, status, n) in self.store.sweep_status_counts().await? {
+        for (id, status, n) in self.store.sweep_status_counts(first.id..=last.id).await? {
             counts.entry(id).or_default().insert(status, n);
         }
-        Ok(sweeps
+        let summaries = sweeps
             .iter()
             .map(|s| summary(s, counts.remove(&s.id).unwrap_or_default()))
-            .collect())
+            .collect();
+        Ok((summaries, total as usize))
     }
 
     async fn record(&self, id: i64) -> Result<SweepRecord, CoreError> {
@@ -297,23 +310,25 @@ impl Core {
     /// 15: epsilon = 0.7, phi = pi/3, no contact or friction) for `n` passes and
     /// radius `h`; `None` where it has no snap (n = 1) or fails.
     async fn simplified_snap(&self, n: u32, h: f64) -> Option<f64> {
-        let key = (n, h.to_bits());
-        if let Some(v) = self.simplified.lock().expect("simplified cache").get(&key) {
-            return *v;
-        }
-        let snap = tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
-            .await
-            .ok()
-            .and_then(|r| {
-                r.map_err(|e| tracing::warn!(n, h, error = %e, "simplified model failed"))
-                    .ok()
-            })
-            .flatten();
-        self.simplified
+        let cell = self
+            .simplified
             .lock()
             .expect("simplified cache")
-            .insert(key, snap);
-        snap
+            .entry((n, h.to_bits()))
+            .or_default()
+            .clone();
+        *cell
+            .get_or_init(|| async move {
+                tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
+                    .await
+                    .ok()
+                    .and_then(|r| {
+                        r.map_err(|e| tracing::warn!(n, h, error = %e, "simplified model failed"))
+                            .ok()
+                    })
+                    .flatten()
+            })
+            .await
     }
 
     async fn case_record(&self, id: i64) -> Result<CaseRecord, CoreError> {
@@ -478,7 +493,16 @@ impl Core {
     pub async fn metrics(&self) -> Result<String, CoreError> {
         let counts: BTreeMap<String, i64> = self.store.status_counts().await?.into_iter().collect();
         let depth = self.store.queue_depth().await?;
-        let sweeps = self.list_sweeps().await?;
+        let mut by_status: BTreeMap<SweepStatus, usize> = BTreeMap::new();
+        for offset in (0..).step_by(METRICS_PAGE) {
+            let (page, _) = self.list_sweeps(METRICS_PAGE, offset).await?;
+            for s in &page {
+                *by_status.entry(s.status).or_default() += 1;
+            }
+            if page.len() < METRICS_PAGE {
+                break;
+            }
+        }
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -506,7 +530,7 @@ impl Core {
             SweepStatus::Done,
             SweepStatus::Cancelled,
         ] {
-            let n = sweeps.iter().filter(|s| s.status == status).count();
+            let n = by_status.get(&status).copied().unwrap_or(0);
             let word = serde_json::to_value(status).expect("status serialises");
             let _ = writeln!(
                 out,
@@ -525,6 +549,9 @@ impl Core {
         Ok(out)
     }
 }
+
+/// Sweeps read per page when the metrics count them.
+const METRICS_PAGE: usize = 1000;
 
 /// The solver's progress of a running case; none once it has stopped running
 /// (a finished case's last heartbeat is not its progress).

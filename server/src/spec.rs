@@ -295,6 +295,7 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     }
     // The cartesian product, last axis fastest.
     let mut cases = Vec::with_capacity(count);
+    let mut builds = solver::case::BuildChecks::default();
     let mut index = vec![0usize; axes.len()];
     for _ in 0..count {
         let mut object = base.clone();
@@ -305,7 +306,7 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
         }
         match serde_json::from_value::<CaseParams>(Value::Object(object)) {
             Ok(params) => {
-                if let Err(problems) = params.validate() {
+                if let Err(problems) = params.validate_in(&mut builds) {
                     for p in problems {
                         let field = match axes.iter().zip(&index).find(|((axis, _), _)| *axis == p.field) {
                             Some((_, i)) => format!("grid.{}[{i}]", p.field),

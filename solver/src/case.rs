@@ -264,6 +264,11 @@ pub const PARAMETERS: &[Parameter] = &[
     },
 ];
 
+/// The knots built so far in one validation pass, by spec, with the
+/// builder's refusal if it refused ([`CaseParams::validate_in`]).
+#[derive(Debug, Default)]
+pub struct BuildChecks(Vec<(KnotSpec, Option<ParamError>)>);
+
 /// A parameter outside its documented range.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 #[error("{field}: {reason}")]
@@ -276,7 +281,30 @@ impl CaseParams {
     /// Checks every documented range and that the case can start
     /// ([`CaseParams::validated_start`]); returns all violations.
     pub fn validate(&self) -> Result<(), Vec<ParamError>> {
-        self.validated_start().map(|_| ())
+        self.validate_in(&mut BuildChecks::default())
+    }
+
+    /// [`CaseParams::validate`], building each distinct knot once per `checks`:
+    /// a grid over parameters the start shape does not read (`mu`, speeds,
+    /// ...) builds one knot, not one per case.
+    pub fn validate_in(&self, checks: &mut BuildChecks) -> Result<(), Vec<ParamError>> {
+        let errors = self.range_errors();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        if self.initial_shape.is_some() {
+            return self.start_shape().map(|_| ()).map_err(|e| vec![e]);
+        }
+        let spec = self.knot_spec();
+        let outcome = match checks.0.iter().find(|(s, _)| *s == spec) {
+            Some((_, outcome)) => outcome.clone(),
+            None => {
+                let outcome = self.start_shape().err();
+                checks.0.push((spec, outcome.clone()));
+                outcome
+            }
+        };
+        outcome.map_or(Ok(()), |e| Err(vec![e]))
     }
 
     /// The shape the case starts from, once every range holds: the checks of
@@ -586,6 +614,40 @@ impl CaseParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A validation pass that builds each distinct knot once gives every case
+    /// the verdict validating it alone gives, refusals included.
+    #[test]
+    fn shared_build_checks_give_the_verdicts_of_lone_validation() {
+        let cases: Vec<CaseParams> = [
+            (3, 301, 0.1),
+            (3, 101, 0.1),
+            (3, 301, 0.4),
+            (3, 101, 0.4),
+            (4, 301, 0.2),
+        ]
+        .into_iter()
+        .map(|(n, nodes, mu)| CaseParams {
+            n,
+            nodes,
+            mu,
+            ..CaseParams::default()
+        })
+        .collect();
+        let mut checks = BuildChecks::default();
+        for c in &cases {
+            assert_eq!(
+                c.validate_in(&mut checks),
+                c.validate(),
+                "n {} nodes {} mu {}",
+                c.n,
+                c.nodes,
+                c.mu
+            );
+        }
+        assert!(cases[1].validate().is_err(), "K = 101 is too coarse for n = 3");
+        assert_eq!(checks.0.len(), 3, "one build per distinct knot");
+    }
 
     #[test]
     fn defaults_are_valid_and_bad_fields_are_named() {

@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 use solver::case::CaseParams;
 use solver::measurements::Inversion;
 use solver::protocol::{CaseReport, Progress};
+use std::ops::RangeInclusive;
 use std::time::Duration;
 
 /// Errors of the store.
@@ -342,10 +343,12 @@ pub trait Store: Send + Sync + 'static {
     /// again). With an idempotency key seen before: the first sweep when the
     /// request hash matches, `Conflict` otherwise. One IMMEDIATE transaction.
     async fn create_sweep(&self, sweep: NewSweep) -> StoreResult<CreateOutcome>;
-    async fn list_sweeps(&self) -> StoreResult<Vec<SweepRecord>>;
+    /// At most `limit` sweeps from the `offset`-th, oldest first.
+    async fn list_sweeps(&self, limit: i64, offset: i64) -> StoreResult<Vec<SweepRecord>>;
+    async fn count_sweeps(&self) -> StoreResult<i64>;
     async fn get_sweep(&self, id: i64) -> StoreResult<Option<SweepRecord>>;
-    /// Per-sweep counts by status word, for every sweep.
-    async fn sweep_status_counts(&self) -> StoreResult<Vec<(i64, String, i64)>>;
+    /// Per-sweep counts by status word, for the sweeps whose id is in `ids`.
+    async fn sweep_status_counts(&self, ids: RangeInclusive<i64>) -> StoreResult<Vec<(i64, String, i64)>>;
     /// The sweep's cases in grid order, with result summaries.
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>>;
     /// Pause, resume or cancel. `NotFound` for an unknown sweep, `Conflict`

@@ -142,17 +142,25 @@ fn report(params: CaseParams, status: Status) -> CaseReport {
 pub(crate) async fn sweeps(store: &dyn Store) {
     let a = create(store, sweep(&[0.1, 0.2, 0.3])).await;
     let b = create(store, sweep(&[0.3, 0.4])).await;
-    let ids: Vec<i64> = store.list_sweeps().await.unwrap().iter().map(|s| s.id).collect();
-    assert_eq!(ids, vec![a.id, b.id]);
+    let ids = |limit, offset| async move {
+        let page = store.list_sweeps(limit, offset).await.unwrap();
+        page.iter().map(|s| s.id).collect::<Vec<i64>>()
+    };
+    assert_eq!(ids(10, 0).await, vec![a.id, b.id]);
+    assert_eq!(ids(1, 1).await, vec![b.id], "the page after the first");
+    assert!(ids(10, 2).await.is_empty(), "past the end");
+    assert_eq!(store.count_sweeps().await.unwrap(), 2);
     let in_a = store.sweep_cases(a.id).await.unwrap();
     let in_b = store.sweep_cases(b.id).await.unwrap();
     assert_eq!(in_a.iter().map(|c| c.position).collect::<Vec<_>>(), vec![0, 1, 2]);
     assert_eq!(in_a[2].case.id, in_b[0].case.id, "mu = 0.3 is one case for both");
-    let counts = store.sweep_status_counts().await.unwrap();
+    let counts = store.sweep_status_counts(a.id..=b.id).await.unwrap();
     assert_eq!(
         counts,
         vec![(a.id, "queued".to_string(), 3), (b.id, "queued".to_string(), 2)]
     );
+    let only_b = store.sweep_status_counts(b.id..=b.id).await.unwrap();
+    assert_eq!(only_b, vec![(b.id, "queued".to_string(), 2)]);
 
     let idem = |hash: &str| {
         let mut s = sweep(&[0.5]);

@@ -159,16 +159,20 @@ impl Store for PgStore {
         sweeps::create(&self.pool, &self.retry, sweep).await
     }
 
-    async fn list_sweeps(&self) -> StoreResult<Vec<SweepRecord>> {
-        sweeps::list(&self.pool).await
+    async fn list_sweeps(&self, limit: i64, offset: i64) -> StoreResult<Vec<SweepRecord>> {
+        sweeps::list(&self.pool, limit, offset).await
+    }
+
+    async fn count_sweeps(&self) -> StoreResult<i64> {
+        sweeps::count(&self.pool).await
     }
 
     async fn get_sweep(&self, id: i64) -> StoreResult<Option<SweepRecord>> {
         sweeps::get(&self.pool, id).await
     }
 
-    async fn sweep_status_counts(&self) -> StoreResult<Vec<(i64, String, i64)>> {
-        sweeps::status_counts(&self.pool).await
+    async fn sweep_status_counts(&self, ids: RangeInclusive<i64>) -> StoreResult<Vec<(i64, String, i64)>> {
+        sweeps::status_counts(&self.pool, ids).await
     }
 
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>> {

@@ -91,23 +91,39 @@ pub(super) async fn create(
     })
 }
 
-pub(super) async fn list(pool: &SqlitePool) -> StoreResult<Vec<SweepRecord>> {
-    let rows = sqlx::query(&format!("SELECT {SWEEP_COLUMNS} FROM sweeps ORDER BY id"))
-        .fetch_all(pool)
-        .await?;
+pub(super) async fn list(pool: &SqlitePool, limit: i64, offset: i64) -> StoreResult<Vec<SweepRecord>> {
+    let rows = sqlx::query(&format!(
+        "SELECT {SWEEP_COLUMNS} FROM sweeps ORDER BY id LIMIT ?1 OFFSET ?2"
+    ))
+    .bind(limit)
+    .bind(offset)
+    .fetch_all(pool)
+    .await?;
     rows.iter().map(sweep_from_row).collect()
+}
+
+pub(super) async fn count(pool: &SqlitePool) -> StoreResult<i64> {
+    Ok(sqlx::query("SELECT COUNT(*) AS n FROM sweeps")
+        .fetch_one(pool)
+        .await?
+        .try_get("n")?)
 }
 
 pub(super) async fn get(pool: &SqlitePool, id: i64) -> StoreResult<Option<SweepRecord>> {
     by_id(pool, id).await
 }
 
-pub(super) async fn status_counts(pool: &SqlitePool) -> StoreResult<Vec<(i64, String, i64)>> {
+pub(super) async fn status_counts(
+    pool: &SqlitePool,
+    ids: RangeInclusive<i64>,
+) -> StoreResult<Vec<(i64, String, i64)>> {
     let rows = sqlx::query(
         "SELECT sc.sweep_id, COALESCE(r.outcome, c.status) AS st, COUNT(*) AS n \
          FROM sweep_cases sc JOIN cases c ON c.id = sc.case_id LEFT JOIN results r ON r.case_id = c.id \
-         GROUP BY sc.sweep_id, st ORDER BY sc.sweep_id, st",
+         WHERE sc.sweep_id BETWEEN ?1 AND ?2 GROUP BY sc.sweep_id, st ORDER BY sc.sweep_id, st",
     )
+    .bind(*ids.start())
+    .bind(*ids.end())
     .fetch_all(pool)
     .await?;
     rows.iter()

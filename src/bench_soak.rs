@@ -11,7 +11,7 @@
 //! prints requests/s, latency percentiles and the server's RSS.
 //! BENCHMARKS.md records it.
 use anyhow::{Context, Result, bail, ensure};
-use knotsweep_worker::store::{Heartbeat, Store, StoreOptions, open_store};
+use knotsweep_worker::store::{CaseState, Heartbeat, Store, StoreOptions, open_store};
 use rand::{Rng, SeedableRng};
 use serde_json::{Value, json};
 use solver::protocol::{CaseReport, Stats, Status};
@@ -284,7 +284,7 @@ async fn drain(store: &dyn Store) -> Result<()> {
         let counts = store.status_counts().await?;
         let open: i64 = counts
             .iter()
-            .filter(|(s, _)| s == "queued" || s == "running")
+            .filter(|(s, _)| s == CaseState::Queued.as_str() || s == CaseState::Running.as_str())
             .map(|(_, n)| n)
             .sum();
         if open == 0 {
@@ -339,7 +339,8 @@ async fn check(
         );
         for c in cases {
             let status = c["status"].as_str().unwrap_or("?");
-            let fine = status == "completed" || (s.cancelled && status == "cancelled");
+            let fine = status == Status::Completed.to_string()
+                || (s.cancelled && status == CaseState::Cancelled.as_str());
             ensure!(
                 fine,
                 "sweep {} (cancelled: {}): case {} ended {status}",
@@ -350,7 +351,7 @@ async fn check(
         }
     }
     let counts: BTreeMap<String, i64> = store.status_counts().await?.into_iter().collect();
-    let stored = counts.get("completed").copied().unwrap_or(0) as usize;
+    let stored = counts.get(&Status::Completed.to_string()).copied().unwrap_or(0) as usize;
     ensure!(
         stored == completions,
         "{stored} stored results for {completions} completions"

@@ -157,10 +157,13 @@ pub(crate) async fn sweeps(store: &dyn Store) {
     let counts = store.sweep_status_counts(a.id..=b.id).await.unwrap();
     assert_eq!(
         counts,
-        vec![(a.id, "queued".to_string(), 3), (b.id, "queued".to_string(), 2)]
+        vec![
+            (a.id, CaseState::Queued.as_str().to_string(), 3),
+            (b.id, CaseState::Queued.as_str().to_string(), 2)
+        ]
     );
     let only_b = store.sweep_status_counts(b.id..=b.id).await.unwrap();
-    assert_eq!(only_b, vec![(b.id, "queued".to_string(), 2)]);
+    assert_eq!(only_b, vec![(b.id, CaseState::Queued.as_str().to_string(), 2)]);
 
     let idem = |hash: &str| {
         let mut s = sweep(&[0.5]);

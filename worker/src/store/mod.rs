@@ -16,6 +16,8 @@
 //! - an expired lease returns the case to the queue (with backoff) or, after
 //!   `max_attempts` claims, marks it `failed` with the reason;
 //! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
+#[macro_use]
+mod backend_impl;
 pub mod postgres;
 mod rows;
 pub mod sqlite;

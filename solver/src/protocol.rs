@@ -873,14 +873,7 @@ mod tests {
 
     #[test]
     fn status_words_are_the_serde_names() {
-        for s in [
-            Status::Completed,
-            Status::Invalid,
-            Status::Diverged,
-            Status::Penetrated,
-            Status::TopologyChanged,
-            Status::Cancelled,
-        ] {
+        for s in Status::ALL {
             assert_eq!(serde_json::to_value(s).unwrap(), s.to_string());
         }
     }

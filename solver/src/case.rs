@@ -208,7 +208,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "protocol",
-        doc: "How the clamps move: \"reference\" (default) pulls at pull_speed throughout, as in the paper; \"adaptive\" ramps up to 8 times pull_speed while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar, and once a snap is detected goes back to the checkpoint 8 before it, lets the knot settle and pulls through the snap at twice pull_speed (about a fifth of the cost; within about 1 % of the reference for clean snaps, not for the high-friction cases at h = 3.4 mm; BENCHMARKS.md).",
+        doc: "How the clamps move: \"reference\" (default) pulls at pull_speed throughout, as in the paper; \"adaptive\" ramps up to 16 times pull_speed (damped, with steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar, and once a snap is detected goes back to the checkpoint 16 before it (further if the knot then snaps within 6), lets the knot settle and pulls through the snap at pull_speed (about a seventh of the cost; within 1 % of the reference for clean snaps, not for the high-friction cases at h = 3.4 mm; BENCHMARKS.md).",
     },
     Parameter {
         name: "dt",

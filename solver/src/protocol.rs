@@ -62,31 +62,41 @@ pub enum Protocol {
     #[default]
     Reference,
     /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
-    /// `pull_speed`, with a checkpoint every `CHECKPOINT_SPACING` in l_k bar.
-    /// When a snap is detected, the pull goes back to the checkpoint
-    /// `RESTART_BEFORE` before it, lets the knot settle with the clamps held,
-    /// and pulls through the snap at `SNAP_FACTOR` times `pull_speed`, fast
-    /// again from `SLOW_AFTER` past it. A snap stage that finds no snap
-    /// within `FALSE_ALARM` approaches fast again; a fast approach that
-    /// reaches the end of the pull redoes its last `END_REVIEW` slowly.
+    /// `pull_speed`, damped as in the relaxation and with steps up to
+    /// `FAST_DT_FACTOR` times the case's, with a checkpoint every
+    /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
+    /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
+    /// settle with the clamps held, and pulls through the snap at
+    /// `pull_speed` (`SNAP_FACTOR`) with the case's damping and step,
+    /// fast again from `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the
+    /// restart means the restart was past the fold: it is redone from
+    /// `RESTART_BEFORE` further back. A snap stage that finds no snap within
+    /// `FALSE_ALARM` approaches fast again; a fast approach that reaches the
+    /// end of the pull redoes its last `END_REVIEW` slowly.
     /// Within 1 % of the reference for clean snaps, not for the
     /// high-friction cases at h = 3.4 mm (BENCHMARKS.md).
     Adaptive,
 }
 
 /// [`Protocol::Adaptive`]: speed-up far from the snap.
-const FAST_FACTOR: f64 = 8.0;
+const FAST_FACTOR: f64 = 16.0;
+/// [`Protocol::Adaptive`]: the largest time step while fast, over the case's.
+const FAST_DT_FACTOR: f64 = 4.0;
 /// [`Protocol::Adaptive`]: checkpoint spacing in l_k bar while fast.
 const CHECKPOINT_SPACING: f64 = 2.0;
 /// [`Protocol::Adaptive`]: how far (l_k bar) before the fast pull's snap the
-/// slow pull restarts; the fast pull snaps late by up to a few l_k bar.
-const RESTART_BEFORE: f64 = 8.0;
+/// slow pull restarts (the damped fast pull snaps late), and how much further
+/// back each retry goes.
+const RESTART_BEFORE: f64 = 16.0;
+/// [`Protocol::Adaptive`]: a slow pull that snaps within this much l_k bar of
+/// its restart started past the fold, and is retried from further back.
+const MIN_LEAD: f64 = 6.0;
 /// [`Protocol::Adaptive`]: how far (l_k bar) past the snap the pull stays slow.
 const SLOW_AFTER: f64 = 4.0;
-/// [`Protocol::Adaptive`]: clamp speed over `pull_speed` through the snap;
-/// the reference protocol at twice its speed moves the n = 3 inversion by
-/// 0.07 % (BENCHMARKS.md).
-const SNAP_FACTOR: f64 = 2.0;
+/// [`Protocol::Adaptive`]: clamp speed over `pull_speed` through the snap:
+/// the reference's. At twice it the reference moves the n = 3 inversion by
+/// only 0.07 %, but the K = 158, mu = 0.2 one by 1.7 % (BENCHMARKS.md).
+const SNAP_FACTOR: f64 = 1.0;
 /// [`Protocol::Adaptive`]: the contact solve's tolerance while fast, when the
 /// case's is tighter.
 const FAST_CONTACT_TOLERANCE: f64 = 1e-4;
@@ -102,8 +112,9 @@ const FALSE_ALARM: f64 = 10.0;
 /// [`Protocol::Adaptive`]: how much of the pull's end (l_k bar) is redone at
 /// the snap speed when the fast approach reaches it without a snap.
 const END_REVIEW: f64 = 20.0;
-/// [`Protocol::Adaptive`]: checkpoints kept (they span `END_REVIEW` and more).
-const CHECKPOINTS: usize = 12;
+/// [`Protocol::Adaptive`]: checkpoints kept (they span `END_REVIEW` and
+/// three times `RESTART_BEFORE`).
+const CHECKPOINTS: usize = 24;
 
 /// A centreline snapshot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -357,6 +368,23 @@ impl Stage {
         }
     }
 
+    /// The damping rate (1/s) given the case's: the fast stages damp like
+    /// the relaxation, so that the knot follows the clamps without swinging.
+    fn damping(self, case: f64) -> f64 {
+        match self {
+            Stage::Reference | Stage::Snap => case,
+            Stage::Approach | Stage::After => case.max(RELAX_DAMPING),
+        }
+    }
+
+    /// The largest time step given the case's.
+    fn dt_max(self, case: f64) -> f64 {
+        match self {
+            Stage::Reference | Stage::Snap => case,
+            Stage::Approach | Stage::After => case * FAST_DT_FACTOR,
+        }
+    }
+
     /// The contact solve's tolerance given the case's.
     fn contact_tolerance(self, case: f64) -> f64 {
         match self {
@@ -374,10 +402,11 @@ struct Checkpoints {
 
 impl Checkpoints {
     /// The latest checkpoint at or before `l_k_bar` along the pull (at l_k
-    /// bar >= it), else the earliest kept; the list is emptied.
+    /// bar >= it), else the earliest kept; it and the later ones leave the
+    /// list, the earlier ones stay for a retry from further back.
     fn before(&mut self, l_k_bar: f64) -> Option<Checkpoint> {
         let at = self.list.iter().rposition(|c| c.l_k_bar >= l_k_bar).unwrap_or(0);
-        self.list.drain(..).nth(at)
+        self.list.drain(at..).next()
     }
 }
 
@@ -500,7 +529,6 @@ impl<'a> Case<'a> {
             let r = &self.world.rods[0];
             (r.node(r.nodes() - 1) - r.node(0)).normalize()
         };
-        self.world.env.damping = self.params.damping;
         let stage = match self.params.protocol {
             Protocol::Adaptive => Stage::Approach,
             Protocol::Reference => Stage::Reference,
@@ -615,6 +643,18 @@ impl<'a> Case<'a> {
                 });
                 saved.next = l_k_bar - CHECKPOINT_SPACING;
             }
+            (Stage::Snap, Some(inv))
+                if inv.l_k_bar > pull.stage_start - MIN_LEAD && !saved.list.is_empty() =>
+            {
+                // The slow pull snapped right after its restart: the restart
+                // was already past the fold. Go back further.
+                if let Some(c) = saved.before(pull.stage_start + RESTART_BEFORE) {
+                    let fast = pull.fast_snap;
+                    self.restore(c, pull)?;
+                    pull.fast_snap = fast;
+                    return Ok(true);
+                }
+            }
             (Stage::Snap, Some(inv)) if l_k_bar <= inv.l_k_bar - SLOW_AFTER => {
                 self.enter(pull, Stage::After, l_k_bar);
             }
@@ -647,6 +687,8 @@ impl<'a> Case<'a> {
         pull.stage = stage;
         pull.stage_start = l_k_bar;
         self.world.contact.solver.tolerance = stage.contact_tolerance(self.params.contact_tolerance);
+        self.world.env.damping = stage.damping(self.params.damping);
+        self.clock.rescale(stage.dt_max(self.params.time_step()));
         self.drive(pull, l_k_bar);
     }
 
@@ -673,7 +715,6 @@ impl<'a> Case<'a> {
         }
         self.world.env.damping = RELAX_DAMPING;
         self.settle(SETTLE_TIME)?;
-        self.world.env.damping = self.params.damping;
         self.enter(pull, Stage::Snap, c.l_k_bar);
         Ok(())
     }

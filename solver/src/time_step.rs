@@ -88,6 +88,14 @@ impl TimeStep {
         }
     }
 
+    /// Rescales the limits so that the largest step is `dt_max` (a fixed step
+    /// stays fixed); the current step is kept within them.
+    pub fn rescale(&mut self, dt_max: f64) {
+        self.options.dt_min *= dt_max / self.options.dt_max;
+        self.options.dt_max = dt_max;
+        self.dt = self.dt.clamp(self.options.dt_min, dt_max);
+    }
+
     /// Advances `world` by one accepted step.
     pub fn advance(&mut self, world: &mut World) -> Result<Advance, WorldError> {
         let o = self.options;

@@ -3,15 +3,18 @@
 use solver::case::{CaseParams, Protocol};
 use solver::protocol::{self, Status};
 
-/// On the coarsest n = 3 mesh (K = 158, mu = 0.2, a clean snap), the
-/// adaptive pull's inversion is within 1 % of the reference pull's, and it
-/// takes under a third of its steps (BENCHMARKS.md compares the presets' cases at K = 301).
+/// On the coarsest n = 3 mesh (K = 158, mu = 0.1), the adaptive pull's
+/// inversion is within 1 % of the reference pull's, and it takes under a
+/// third of its steps (BENCHMARKS.md compares the presets' cases at K = 301).
+/// At mu = 0.1 the reference itself is fixed to 0.5 % (l_k bar 147.1 at
+/// 3 mm/s, 146.5 at 6 mm/s); at mu = 0.2 it is not (134.0 and 131.8), so no
+/// other protocol can be held to 1 % of it there.
 #[test]
 fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
     let run = |protocol| {
         let params = CaseParams {
             nodes: 158,
-            mu: 0.2,
+            mu: 0.1,
             protocol,
             ..CaseParams::default()
         };

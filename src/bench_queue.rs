@@ -5,7 +5,7 @@
 use anyhow::{Context, Result};
 use knotsweep_worker::store::{CreateOutcome, NewCase, NewSweep, Store, StoreOptions, open_store};
 use solver::case::CaseParams;
-use solver::protocol::{CaseReport, Stats, Status};
+use solver::protocol::{CaseReport, Status};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -103,17 +103,7 @@ async fn claimer(store: Arc<dyn Store>, i: usize) -> Result<usize> {
     let owner = format!("bench-{i}");
     let mut n = 0;
     while let Some(c) = store.claim(&owner, Duration::from_secs(60)).await? {
-        let report = CaseReport {
-            status: Status::Completed,
-            reason: String::new(),
-            params: c.params,
-            determinant_initial: None,
-            determinant_final: None,
-            inversion: None,
-            series: Vec::new(),
-            frames: Vec::new(),
-            stats: Stats::default(),
-        };
+        let report = CaseReport::empty(c.params, Status::Completed);
         anyhow::ensure!(store.complete(&c.lease, &report).await?, "lost a lease");
         n += 1;
     }

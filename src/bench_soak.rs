@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail, ensure};
 use knotsweep_worker::store::{CaseState, Heartbeat, Store, StoreOptions, open_store};
 use rand::{Rng, SeedableRng};
 use serde_json::{Value, json};
-use solver::protocol::{CaseReport, Stats, Status};
+use solver::protocol::{CaseReport, Status};
 use std::collections::{BTreeMap, HashSet};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -255,15 +255,9 @@ async fn stand_in_worker(
             }
             Heartbeat::Held { cancel: false } => {
                 let report = CaseReport {
-                    status: Status::Completed,
-                    reason: String::new(),
-                    params: claim.params,
                     determinant_initial: Some(7),
                     determinant_final: Some(7),
-                    inversion: None,
-                    series: Vec::new(),
-                    frames: Vec::new(),
-                    stats: Stats::default(),
+                    ..CaseReport::empty(claim.params, Status::Completed)
                 };
                 ensure!(
                     store.complete(&claim.lease, &report).await?,

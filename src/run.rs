@@ -237,4 +237,15 @@ fn summarise(report: &CaseReport) {
         s.contact_time,
         s.dynamics_time
     );
+    let stages: Vec<String> = report
+        .stages
+        .iter()
+        .map(|span| {
+            format!(
+                "{:?} {:.1} -> {:.1} ({} steps)",
+                span.stage, span.from_l_k_bar, span.to_l_k_bar, span.steps
+            )
+        })
+        .collect();
+    println!("stages in l_k bar: {}", stages.join(", "));
 }

@@ -10,7 +10,7 @@ use knotsweep_worker::store::{
     StoreError, StoreOptions, SweepAction, SweepState, open_store,
 };
 use solver::case::CaseParams;
-use solver::protocol::{CaseReport, Stats, Status};
+use solver::protocol::{CaseReport, Status};
 use std::collections::HashSet;
 use std::sync::Arc;
 use std::time::Duration;
@@ -98,15 +98,9 @@ async fn create(store: &dyn Store, s: NewSweep) -> (i64, usize) {
 
 fn report(params: CaseParams) -> CaseReport {
     CaseReport {
-        status: Status::Completed,
-        reason: String::new(),
-        params,
         determinant_initial: Some(7),
         determinant_final: Some(7),
-        inversion: None,
-        series: Vec::new(),
-        frames: Vec::new(),
-        stats: Stats::default(),
+        ..CaseReport::empty(params, Status::Completed)
     }
 }
 

@@ -14,7 +14,8 @@ use serde::{Deserialize, Serialize};
 /// Revision 1: the model of session 3 (friction at the centre lines).
 /// Revision 2: friction at the surfaces, so rods roll on each other
 /// (`rolling`, docs/FIDELITY.md).
-pub const PHYSICS_REVISION: u32 = 2;
+/// Revision 3: the adaptive pull is the default protocol (`protocol`).
+pub const PHYSICS_REVISION: u32 = 3;
 
 /// Parameters of one overhand-knot tightening case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -49,8 +50,8 @@ pub struct CaseParams {
     pub density: f64,
     /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
     pub pull_speed: f64,
-    /// How the pull is scheduled: `reference` (at `pull_speed` throughout) or
-    /// `adaptive` (fast far from the snap, slow through it).
+    /// How the pull is scheduled: `adaptive` (fast far from the snap, slow
+    /// through it; the default) or `reference` (at `pull_speed` throughout).
     pub protocol: Protocol,
     /// Time step (s), the largest one with `adaptive_dt`; `None`: the automatic
     /// step of [`CaseParams::time_step`] (0.5 ms at L = 1 m, K = 301).
@@ -208,7 +209,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "protocol",
-        doc: "How the clamps move: \"reference\" (default) pulls at pull_speed throughout, as in the paper; \"adaptive\" ramps up to 16 times pull_speed (damped, with steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar, and once a snap is detected goes back to the checkpoint 16 before it (further if the knot then snaps within 6), lets the knot settle and pulls through the snap at pull_speed (about a seventh of the cost; within 1 % of the reference for clean snaps, not for the high-friction cases at h = 3.4 mm; BENCHMARKS.md).",
+        doc: "How the clamps move: \"adaptive\" (default) ramps up to 16 times pull_speed (damped, with steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the result depends on the pulling path (BENCHMARKS.md). \"reference\" pulls at pull_speed throughout, as in the paper.",
     },
     Parameter {
         name: "dt",

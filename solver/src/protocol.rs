@@ -59,25 +59,31 @@ impl std::fmt::Display for Status {
 #[serde(rename_all = "snake_case")]
 pub enum Protocol {
     /// The whole pull at `pull_speed` (the paper's protocol).
-    #[default]
     Reference,
     /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
     /// `pull_speed`, damped as in the relaxation and with steps up to
     /// `FAST_DT_FACTOR` times the case's, with a checkpoint every
     /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
     /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
-    /// settle with the clamps held, and pulls through the snap at
-    /// `pull_speed` (`SNAP_FACTOR`) with the case's damping and step,
-    /// fast again from `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the
-    /// restart means the restart was past the fold: it is redone from
-    /// `RESTART_BEFORE` further back. A snap stage that finds no snap within
-    /// `FALSE_ALARM` approaches fast again; a fast approach that reaches the
-    /// end of the pull redoes its last `END_REVIEW` slowly.
-    /// Within 1 % of the reference for clean snaps, not for the
-    /// high-friction cases at h = 3.4 mm (BENCHMARKS.md).
+    /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
+    /// times the case's), and pulls through the snap at `pull_speed`
+    /// (`SNAP_FACTOR`) with the case's damping and step, fast again from
+    /// `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the restart means
+    /// the restart was past the fold: it is redone from `RESTART_BEFORE`
+    /// further back. A snap stage that finds no snap within `FALSE_ALARM`
+    /// approaches fast again; a fast approach that reaches the end of the
+    /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
+    /// whole pull is the reference's. The report's `stages` list what ran.
+    #[default]
     Adaptive,
 }
 
+/// [`Protocol::Adaptive`]: the largest friction coefficient it runs fast
+/// at; above it the whole pull is the reference's. Where friction is high the
+/// knot's state depends on how it was pulled (at mu = 0.5 the reference
+/// itself moves by 2 % between 1.5 and 3 mm/s), and a fast approach lands
+/// 2-13 % from the reference at mu = 0.3-0.7 (BENCHMARKS.md).
+pub const ADAPTIVE_MAX_MU: f64 = 0.2;
 /// [`Protocol::Adaptive`]: speed-up far from the snap.
 const FAST_FACTOR: f64 = 16.0;
 /// [`Protocol::Adaptive`]: the largest time step while fast, over the case's.
@@ -87,12 +93,12 @@ const CHECKPOINT_SPACING: f64 = 2.0;
 /// [`Protocol::Adaptive`]: how far (l_k bar) before the fast pull's snap the
 /// slow pull restarts (the damped fast pull snaps late), and how much further
 /// back each retry goes.
-const RESTART_BEFORE: f64 = 16.0;
+const RESTART_BEFORE: f64 = 10.0;
 /// [`Protocol::Adaptive`]: a slow pull that snaps within this much l_k bar of
 /// its restart started past the fold, and is retried from further back.
-const MIN_LEAD: f64 = 6.0;
+const MIN_LEAD: f64 = 2.0;
 /// [`Protocol::Adaptive`]: how far (l_k bar) past the snap the pull stays slow.
-const SLOW_AFTER: f64 = 4.0;
+const SLOW_AFTER: f64 = 1.0;
 /// [`Protocol::Adaptive`]: clamp speed over `pull_speed` through the snap:
 /// the reference's. At twice it the reference moves the n = 3 inversion by
 /// only 0.07 %, but the K = 158, mu = 0.2 one by 1.7 % (BENCHMARKS.md).
@@ -100,9 +106,11 @@ const SNAP_FACTOR: f64 = 1.0;
 /// [`Protocol::Adaptive`]: the contact solve's tolerance while fast, when the
 /// case's is tighter.
 const FAST_CONTACT_TOLERANCE: f64 = 1e-4;
-/// [`Protocol::Adaptive`]: the fast stages ramp their speed up over this
-/// much l_k bar (a sudden start shakes the knot).
-const RAMP: f64 = 10.0;
+/// [`Protocol::Adaptive`]: the approach ramps its speed up over this much
+/// l_k bar (a sudden start shakes the knot), the stage after the snap over
+/// `RAMP_AFTER`.
+const RAMP: f64 = 4.0;
+const RAMP_AFTER: f64 = 2.0;
 /// [`Protocol::Adaptive`]: longest settling (s) after going back to a checkpoint.
 const SETTLE_TIME: f64 = 0.5;
 /// [`Protocol::Adaptive`]: how far (l_k bar) past the fast pull's snap the
@@ -110,10 +118,11 @@ const SETTLE_TIME: f64 = 0.5;
 /// pull's own swinging and approaches fast again.
 const FALSE_ALARM: f64 = 10.0;
 /// [`Protocol::Adaptive`]: how much of the pull's end (l_k bar) is redone at
-/// the snap speed when the fast approach reaches it without a snap.
+/// the snap speed when the fast approach reaches it without a snap (its lag
+/// and swinging may hide one there).
 const END_REVIEW: f64 = 20.0;
-/// [`Protocol::Adaptive`]: checkpoints kept (they span `END_REVIEW` and
-/// three times `RESTART_BEFORE`).
+/// [`Protocol::Adaptive`]: checkpoints kept (they span several retries of
+/// `RESTART_BEFORE`).
 const CHECKPOINTS: usize = 24;
 
 /// A centreline snapshot.
@@ -171,6 +180,39 @@ pub struct CaseReport {
     pub series: Vec<Sample>,
     pub frames: Vec<Frame>,
     pub stats: Stats,
+    /// The run's stages in order, with their steps (empty in reports stored
+    /// before they were recorded).
+    #[serde(default)]
+    pub stages: Vec<StageSpan>,
+}
+
+impl CaseReport {
+    /// A report of `params` with `status` and nothing measured yet.
+    pub fn empty(params: CaseParams, status: Status) -> Self {
+        Self {
+            status,
+            reason: String::new(),
+            params,
+            determinant_initial: None,
+            determinant_final: None,
+            inversion: None,
+            series: Vec::new(),
+            frames: Vec::new(),
+            stats: Stats::default(),
+            stages: Vec::new(),
+        }
+    }
+}
+
+/// A stretch of a run in one stage.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageSpan {
+    pub stage: Stage,
+    /// l_k bar where the stretch began and ended.
+    pub from_l_k_bar: f64,
+    pub to_l_k_bar: f64,
+    /// Time steps taken in it.
+    pub steps: u64,
 }
 
 /// Progress handed to the caller after every sample.
@@ -212,17 +254,7 @@ pub fn run_observed(
     observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
 ) -> CaseReport {
     let started = std::time::Instant::now();
-    let mut report = CaseReport {
-        status: Status::Completed,
-        reason: String::new(),
-        params: params.clone(),
-        determinant_initial: None,
-        determinant_final: None,
-        inversion: None,
-        series: Vec::new(),
-        frames: Vec::new(),
-        stats: Stats::default(),
-    };
+    let mut report = CaseReport::empty(params.clone(), Status::Completed);
     let (shape, world) = match build(params, &mut report) {
         Ok(built) => built,
         Err(reason) => {
@@ -342,9 +374,13 @@ struct Pull {
     fast_snap: Option<f64>,
 }
 
-/// Where a pull is.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Stage {
+/// Where a run is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    /// Damped, with the clamps held, after the knot is built (stage 2) or
+    /// after going back to a checkpoint.
+    Settle,
     /// [`Protocol::Reference`]: the whole pull at `pull_speed`.
     Reference,
     /// [`Protocol::Adaptive`]: fast, checkpointing, until a snap is detected.
@@ -360,11 +396,11 @@ impl Stage {
     /// the fast stages ramp up from the snap speed over `RAMP`.
     fn speed(self, pulled: f64) -> f64 {
         match self {
+            Stage::Settle => 0.0,
             Stage::Reference => 1.0,
             Stage::Snap => SNAP_FACTOR,
-            Stage::Approach | Stage::After => {
-                SNAP_FACTOR + (FAST_FACTOR - SNAP_FACTOR) * (pulled / RAMP).clamp(0.0, 1.0)
-            }
+            Stage::Approach => ramp(pulled / RAMP),
+            Stage::After => ramp(pulled / RAMP_AFTER),
         }
     }
 
@@ -373,7 +409,7 @@ impl Stage {
     fn damping(self, case: f64) -> f64 {
         match self {
             Stage::Reference | Stage::Snap => case,
-            Stage::Approach | Stage::After => case.max(RELAX_DAMPING),
+            Stage::Settle | Stage::Approach | Stage::After => case.max(RELAX_DAMPING),
         }
     }
 
@@ -381,17 +417,22 @@ impl Stage {
     fn dt_max(self, case: f64) -> f64 {
         match self {
             Stage::Reference | Stage::Snap => case,
-            Stage::Approach | Stage::After => case * FAST_DT_FACTOR,
+            Stage::Settle | Stage::Approach | Stage::After => case * FAST_DT_FACTOR,
         }
     }
 
     /// The contact solve's tolerance given the case's.
     fn contact_tolerance(self, case: f64) -> f64 {
         match self {
-            Stage::Reference | Stage::Snap => case,
+            Stage::Settle | Stage::Reference | Stage::Snap => case,
             Stage::Approach | Stage::After => case.max(FAST_CONTACT_TOLERANCE),
         }
     }
+}
+
+/// From the snap speed (0) to the fast one (1).
+fn ramp(fraction: f64) -> f64 {
+    SNAP_FACTOR + (FAST_FACTOR - SNAP_FACTOR) * fraction.clamp(0.0, 1.0)
 }
 
 /// A fast approach's checkpoints and where the next is due.
@@ -442,6 +483,12 @@ impl<'a> Case<'a> {
         l_k_bar(&self.world, self.params)
     }
 
+    /// Whether the pull goes fast far from the snap: [`Protocol::Adaptive`]
+    /// up to [`ADAPTIVE_MAX_MU`].
+    fn fast(&self) -> bool {
+        self.params.protocol == Protocol::Adaptive && self.params.mu <= ADAPTIVE_MAX_MU
+    }
+
     /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h
     /// (`during` says when; called only then).
     fn penetration(&self, max_penetration: f64, during: impl FnOnce() -> String) -> Result<(), Ending> {
@@ -485,6 +532,7 @@ impl<'a> Case<'a> {
     /// energy is a `relax_tolerance` fraction of the elastic energy or
     /// `relax_time` has passed.
     fn relax(&mut self) -> Result<(), Ending> {
+        self.begin(Stage::Settle);
         self.settle(self.params.relax_time)?;
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
@@ -505,6 +553,7 @@ impl<'a> Case<'a> {
                 .map_err(|e| Ending::new(Status::Diverged, format!("while relaxing: {e}")))?;
             settled_for += step.dt;
             self.report.stats.relax_steps += 1;
+            self.count_step();
             self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
             let rod = &self.world.rods[0];
             let ke = rod.kinetic_energy();
@@ -529,9 +578,10 @@ impl<'a> Case<'a> {
             let r = &self.world.rods[0];
             (r.node(r.nodes() - 1) - r.node(0)).normalize()
         };
-        let stage = match self.params.protocol {
-            Protocol::Adaptive => Stage::Approach,
-            Protocol::Reference => Stage::Reference,
+        let stage = if self.fast() {
+            Stage::Approach
+        } else {
+            Stage::Reference
         };
         let start_l_k_bar = self.l_k_bar();
         let mut pull = Pull {
@@ -582,10 +632,7 @@ impl<'a> Case<'a> {
                 continue;
             }
             let tight = self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
-            if l_k_bar <= stop_l || tight {
-                if self.review_end(&mut pull, &mut saved, l_k_bar)? {
-                    continue;
-                }
+            if (l_k_bar <= stop_l || tight) && !self.review_end(&mut pull, &mut saved, l_k_bar)? {
                 break;
             }
         }
@@ -610,6 +657,7 @@ impl<'a> Case<'a> {
         stats.steps += 1;
         stats.newton_iterations += u64::from(step.newton_iterations);
         stats.contact_sweeps += step.contact_sweeps as u64;
+        self.count_step();
         self.penetration(step.max_penetration, || {
             format!("at l_k bar {:.2}", self.l_k_bar())
         })?;
@@ -633,14 +681,7 @@ impl<'a> Case<'a> {
                 if saved.list.len() == CHECKPOINTS {
                     saved.list.pop_front();
                 }
-                saved.list.push_back(Checkpoint {
-                    l_k_bar,
-                    world: self.world.clone(),
-                    clock: self.clock.clone(),
-                    pull: pull.clone(),
-                    series: self.report.series.len(),
-                    frames: self.report.frames.len(),
-                });
+                saved.list.push_back(self.checkpoint(pull, l_k_bar));
                 saved.next = l_k_bar - CHECKPOINT_SPACING;
             }
             (Stage::Snap, Some(inv))
@@ -668,9 +709,8 @@ impl<'a> Case<'a> {
         Ok(false)
     }
 
-    /// At the stop condition: a fast approach that ends without a snap may
-    /// have passed one its swinging hid, so the end of the pull is redone
-    /// slowly from a checkpoint (returns `true`).
+    /// At the stop condition: a fast approach without a snap redoes the
+    /// last `END_REVIEW` of the pull from a checkpoint (returns `true`).
     fn review_end(&mut self, pull: &mut Pull, saved: &mut Checkpoints, l_k_bar: f64) -> Result<bool, Ending> {
         if pull.stage != Stage::Approach {
             return Ok(false);
@@ -681,15 +721,48 @@ impl<'a> Case<'a> {
         }
     }
 
+    /// The state to come back to from `l_k_bar`.
+    fn checkpoint(&self, pull: &Pull, l_k_bar: f64) -> Checkpoint {
+        Checkpoint {
+            l_k_bar,
+            world: self.world.clone(),
+            clock: self.clock.clone(),
+            pull: pull.clone(),
+            series: self.report.series.len(),
+            frames: self.report.frames.len(),
+        }
+    }
+
     /// Enters `stage` at `l_k_bar`: the clamps at its speed, the contact
     /// solve at its tolerance.
     fn enter(&mut self, pull: &mut Pull, stage: Stage, l_k_bar: f64) {
+        self.begin(stage);
         pull.stage = stage;
         pull.stage_start = l_k_bar;
         self.world.contact.solver.tolerance = stage.contact_tolerance(self.params.contact_tolerance);
         self.world.env.damping = stage.damping(self.params.damping);
         self.clock.rescale(stage.dt_max(self.params.time_step()));
         self.drive(pull, l_k_bar);
+    }
+
+    /// A new entry in the report's stages, from here.
+    fn begin(&mut self, stage: Stage) {
+        let at = self.l_k_bar();
+        self.report.stages.push(StageSpan {
+            stage,
+            from_l_k_bar: at,
+            to_l_k_bar: at,
+            steps: 0,
+        });
+    }
+
+    /// Counts a step in the current stage, which now ends here.
+    fn count_step(&mut self) {
+        let at = self.l_k_bar();
+        if let Some(span) = self.report.stages.last_mut() {
+            span.steps += 1;
+            span.to_l_k_bar = at;
+        }
     }
 
     /// Both clamps moving apart at the stage's speed at `l_k_bar`.
@@ -704,19 +777,22 @@ impl<'a> Case<'a> {
     /// with the clamps held (the fast pull leaves it swinging) before the
     /// snap stage starts.
     fn restore(&mut self, c: Checkpoint, pull: &mut Pull) -> Result<(), Ending> {
+        let at = c.l_k_bar;
+        self.rewind(c, pull);
+        self.enter(pull, Stage::Settle, at);
+        self.settle(SETTLE_TIME)?;
+        self.enter(pull, Stage::Snap, at);
+        Ok(())
+    }
+
+    /// The world, pull, series and frames back as they were at `c`.
+    fn rewind(&mut self, c: Checkpoint, pull: &mut Pull) {
         self.world = c.world;
         self.clock = c.clock;
         *pull = c.pull;
         self.report.series.truncate(c.series);
         self.report.frames.truncate(c.frames);
         self.report.inversion = None;
-        for end in [End::Start, End::Finish] {
-            self.world.rods[0].move_clamp(end, Vector3::zeros());
-        }
-        self.world.env.damping = RELAX_DAMPING;
-        self.settle(SETTLE_TIME)?;
-        self.enter(pull, Stage::Snap, c.l_k_bar);
-        Ok(())
     }
 
     /// One sample of eq. (11) and the braid's shape; detects the inversion.

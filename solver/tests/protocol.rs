@@ -1,7 +1,7 @@
 //! The pull protocols (`solver::protocol::Protocol`): the adaptive pull finds
 //! the reference pull's inversion in far fewer steps.
 use solver::case::{CaseParams, Protocol};
-use solver::protocol::{self, Status};
+use solver::protocol::{self, Stage, Status};
 
 /// On the coarsest n = 3 mesh (K = 158, mu = 0.1), the adaptive pull's
 /// inversion is within 1 % of the reference pull's, and it takes under a
@@ -33,4 +33,28 @@ fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
         3 * adaptive_steps < reference_steps,
         "{adaptive_steps} steps against {reference_steps}"
     );
+}
+
+/// Above `ADAPTIVE_MAX_MU` the adaptive protocol pulls exactly as the
+/// reference does (a short pull of the coarsest mesh at mu = 0.3).
+#[test]
+fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
+    let run = |protocol| {
+        let params = CaseParams {
+            nodes: 158,
+            mu: 0.3,
+            min_l_k_bar: 420.0,
+            protocol,
+            ..CaseParams::default()
+        };
+        protocol::run(&params, &mut |_| true)
+    };
+    let reference = run(Protocol::Reference);
+    let adaptive = run(Protocol::Adaptive);
+    const { assert!(0.3 > protocol::ADAPTIVE_MAX_MU) };
+    assert_eq!(adaptive.status, Status::Completed, "{}", adaptive.reason);
+    assert!(adaptive.series.len() > 10, "{} samples", adaptive.series.len());
+    assert_eq!(adaptive.series, reference.series);
+    let stages: Vec<Stage> = adaptive.stages.iter().map(|s| s.stage).collect();
+    assert_eq!(stages, [Stage::Settle, Stage::Reference]);
 }

@@ -5,7 +5,7 @@
 use super::postgres::PgStore;
 use super::sqlite::{SqliteOptions, SqliteStore};
 use super::*;
-use solver::protocol::{Stats, Status};
+use solver::protocol::Status;
 
 const LEASE: Duration = Duration::from_secs(30);
 
@@ -125,15 +125,9 @@ async fn last_log(store: &dyn Store, id: i64) -> String {
 
 fn report(params: CaseParams, status: Status) -> CaseReport {
     CaseReport {
-        status,
-        reason: String::new(),
-        params,
         determinant_initial: Some(7),
         determinant_final: Some(7),
-        inversion: None,
-        series: Vec::new(),
-        frames: Vec::new(),
-        stats: Stats::default(),
+        ..CaseReport::empty(params, status)
     }
 }
 

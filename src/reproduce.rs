@@ -491,7 +491,7 @@ fn report(get: &Lookup, simplified: &[(u32, Option<f64>)]) -> Result<String> {
     let d = CaseParams::default();
     writeln!(
         doc,
-        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}.\n",
+        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, pull protocol `{}` (`solver::protocol::Protocol`; above mu = {} as `reference`).\n",
         d.length,
         d.nodes,
         d.youngs_modulus,
@@ -507,6 +507,8 @@ fn report(get: &Lookup, simplified: &[(u32, Option<f64>)]) -> Result<String> {
         d.mu,
         d.h * 1e3,
         d.contact_tolerance,
+        serde_json::to_value(d.protocol)?.as_str().unwrap_or_default(),
+        protocol::ADAPTIVE_MAX_MU,
     )?;
     writeln!(doc, "| check | command | figure | pass |\n|---|---|---|---|")?;
     let passed = rows.iter().filter(|r| r.3).count();

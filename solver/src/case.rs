@@ -209,7 +209,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "protocol",
-        doc: "How the clamps move: \"adaptive\" (default) ramps up to 16 times pull_speed (damped, with steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the result depends on the pulling path (BENCHMARKS.md). \"reference\" pulls at pull_speed throughout, as in the paper.",
+        doc: "How the clamps move: \"adaptive\" (default) ramps up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the result depends on the pulling path (BENCHMARKS.md). \"reference\" pulls at pull_speed throughout, as in the paper.",
     },
     Parameter {
         name: "dt",

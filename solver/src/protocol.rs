@@ -61,8 +61,8 @@ pub enum Protocol {
     /// The whole pull at `pull_speed` (the paper's protocol).
     Reference,
     /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
-    /// `pull_speed`, damped as in the relaxation and with steps up to
-    /// `FAST_DT_FACTOR` times the case's, with a checkpoint every
+    /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
+    /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
     /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
     /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
     /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
@@ -734,14 +734,17 @@ impl<'a> Case<'a> {
     }
 
     /// Enters `stage` at `l_k_bar`: the clamps at its speed, the contact
-    /// solve at its tolerance.
+    /// solve at its tolerance, the largest step its own (a constant step,
+    /// `adaptive_dt` false, stays the case's).
     fn enter(&mut self, pull: &mut Pull, stage: Stage, l_k_bar: f64) {
         self.begin(stage);
         pull.stage = stage;
         pull.stage_start = l_k_bar;
         self.world.contact.solver.tolerance = stage.contact_tolerance(self.params.contact_tolerance);
         self.world.env.damping = stage.damping(self.params.damping);
-        self.clock.rescale(stage.dt_max(self.params.time_step()));
+        if self.params.adaptive_dt {
+            self.clock.rescale(stage.dt_max(self.params.time_step()));
+        }
         self.drive(pull, l_k_bar);
     }
 

@@ -507,7 +507,7 @@ fn report(get: &Lookup, simplified: &[(u32, Option<f64>)]) -> Result<String> {
         d.mu,
         d.h * 1e3,
         d.contact_tolerance,
-        serde_json::to_value(d.protocol)?.as_str().unwrap_or_default(),
+        d.protocol,
         protocol::ADAPTIVE_MAX_MU,
     )?;
     writeln!(doc, "| check | command | figure | pass |\n|---|---|---|---|")?;

@@ -242,7 +242,7 @@ fn summarise(report: &CaseReport) {
         .iter()
         .map(|span| {
             format!(
-                "{:?} {:.1} -> {:.1} ({} steps)",
+                "{} {:.1} -> {:.1} ({} steps)",
                 span.stage, span.from_l_k_bar, span.to_l_k_bar, span.steps
             )
         })

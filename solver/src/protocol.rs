@@ -46,11 +46,27 @@ impl Status {
     ];
 }
 
+/// Writes a unit enum as its serde name: the word reports and the API use.
+fn serde_word(value: &impl Serialize, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+    let word = serde_json::to_value(value).map_err(|_| std::fmt::Error)?;
+    f.write_str(word.as_str().ok_or(std::fmt::Error)?)
+}
+
 impl std::fmt::Display for Status {
-    /// The status word of the reports and the API (the serde names).
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        let word = serde_json::to_value(self).map_err(|_| std::fmt::Error)?;
-        f.write_str(word.as_str().ok_or(std::fmt::Error)?)
+        serde_word(self, f)
+    }
+}
+
+impl std::fmt::Display for Protocol {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        serde_word(self, f)
+    }
+}
+
+impl std::fmt::Display for Stage {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        serde_word(self, f)
     }
 }
 
@@ -81,8 +97,9 @@ pub enum Protocol {
 /// [`Protocol::Adaptive`]: the largest friction coefficient it runs fast
 /// at; above it the whole pull is the reference's. Where friction is high the
 /// knot's state depends on how it was pulled (at mu = 0.5 the reference
-/// itself moves by 2 % between 1.5 and 3 mm/s), and a fast approach lands
-/// 2-13 % from the reference at mu = 0.3-0.7 (BENCHMARKS.md).
+/// itself moves by 2.5 % between 1.5 and 3 mm/s), and the fast approaches
+/// tried landed 1.8-17 % from the reference at mu = 0.3-0.7, or lost the
+/// snap (BENCHMARKS.md, issue 17's notes).
 pub const ADAPTIVE_MAX_MU: f64 = 0.2;
 /// [`Protocol::Adaptive`]: speed-up far from the snap.
 const FAST_FACTOR: f64 = 16.0;
@@ -393,7 +410,8 @@ pub enum Stage {
 
 impl Stage {
     /// Clamp speed over `pull_speed`, `pulled` (in l_k bar) into the stage:
-    /// the fast stages ramp up from the snap speed over `RAMP`.
+    /// the fast stages ramp up from the snap speed over `RAMP` (the approach)
+    /// or `RAMP_AFTER` (after the snap).
     fn speed(self, pulled: f64) -> f64 {
         match self {
             Stage::Settle => 0.0,
@@ -989,12 +1007,16 @@ fn finish(
 
 #[cfg(test)]
 mod tests {
-    use super::Status;
+    use super::{Protocol, Stage, Status};
 
     #[test]
-    fn status_words_are_the_serde_names() {
+    fn enum_words_are_the_serde_names() {
         for s in Status::ALL {
             assert_eq!(serde_json::to_value(s).unwrap(), s.to_string());
         }
+        for p in [Protocol::Reference, Protocol::Adaptive] {
+            assert_eq!(serde_json::to_value(p).unwrap(), p.to_string());
+        }
+        assert_eq!(Stage::Settle.to_string(), "settle");
     }
 }

@@ -190,8 +190,12 @@ struct Row {
     spin_levers: [Vector3<f64>; 2],
     spin_push: [f64; 2],
     frame: ContactFrame,
-    /// Inverse of the isotropic diagonal block `w_c` of `W`; 0 when `w_c = 0`
-    /// (both bodies fixed: the contact cannot act).
+    /// Inverse of the normal entry `w_c` of the diagonal block of `W` (the
+    /// isotropic part: levers are tangent); 0 when `w_c = 0` (both bodies
+    /// fixed: the contact cannot act).
+    inv_w_n: f64,
+    /// Inverse of the largest eigenvalue of the block's tangential part
+    /// (`w_c` plus the rank-two spin terms); `inv_w_n` without levers.
     inv_w: f64,
     mu: f64,
     /// `sliding_direction` in the local frame (zero normal component).
@@ -232,17 +236,25 @@ impl Row {
     }
 
     /// The local update `r <- P(r - rho u)` for the current local velocity
-    /// `u`, with `P` the projection of Coulomb's law: `r_n = max(0, y_n)`,
+    /// `u` (`rho = (rho_n, rho_t, rho_t)`), with `P` the projection of
+    /// Coulomb's law: `r_n = max(0, y_n)`,
     /// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`,
     /// or, with a sliding direction `t`, the point of the segment
     /// `{a t : |a| <= mu r_n}` closest to `y_t` (eq. 10's `D`).
     /// A fixed point satisfies Signorini (eq. 8) and Coulomb (eq. 9) for any
-    /// `rho > 0`. With `rho = 1 / w_c` this is the exact solution of the
-    /// one-contact problem, [`super::cone::solve_isotropic`] (as `u` is affine
-    /// in `r` with slope `w_c I`); `rho = omega / w_c` over-relaxes it.
+    /// `rho_n, rho_t > 0`: `u_n = 0` where `r_n > 0` whatever `rho_n`, and a
+    /// tangential force on the disk's rim points against `u_t` because
+    /// `rho_t` is one scalar. With `rho_n = rho_t = 1 / w_c` this is the exact
+    /// solution of the one-contact problem, [`super::cone::solve_isotropic`]
+    /// (as `u` is affine in `r` with slope `w_c I` without levers); `omega`
+    /// times the inverse block entries over-relaxes it.
     #[inline(always)]
-    fn update(&self, u: &Vector3<f64>, rho: f64) -> Vector3<f64> {
-        let y = self.r - rho * u;
+    fn update(&self, u: &Vector3<f64>, rho_n: f64, rho_t: f64) -> Vector3<f64> {
+        let y = Vector3::new(
+            self.r.x - rho_n * u.x,
+            self.r.y - rho_t * u.y,
+            self.r.z - rho_t * u.z,
+        );
         if y.x <= 0.0 {
             return Vector3::zeros();
         }
@@ -354,19 +366,23 @@ impl GaussSeidel {
             let frame = ContactFrame::from_normal(&contact.normal);
             let mut spin_free = Vector3::zeros();
             let mut spin_push = [0.0; 2];
-            let mut spin_block = 0.0;
+            // The spin part of the tangential block, sum_k (dt / I_k) L_k L_k^T
+            // in the local tangent axes: entries (t1 t1, t1 t2, t2 t2).
+            let mut spin_block = [0.0; 3];
             if let Some(sp) = spin {
                 for (k, (e, lever)) in contact.spin.iter().enumerate() {
                     if *lever != Vector3::zeros() && *e < edges {
                         spin_free += lever * sp.free[*e];
                         spin_push[k] = dt * sp.inv_inertia[*e];
-                        spin_block += spin_push[k] * lever.norm_squared();
+                        let l = frame.to_local(lever);
+                        spin_block[0] += spin_push[k] * l.y * l.y;
+                        spin_block[1] += spin_push[k] * l.y * l.z;
+                        spin_block[2] += spin_push[k] * l.z * l.z;
                     }
                 }
             }
-            // With levers the block is no longer isotropic: its largest
-            // eigenvalue is at most the isotropic part plus the spin part.
-            let w = dt * self_block(contact, inv_mass) + spin_block;
+            let w_n = dt * self_block(contact, inv_mass);
+            let w_t = w_n + largest_eigenvalue(spin_block);
             let mut free = frame.to_local(&(gather(contact, v_free) + spin_free));
             free.x += if options.close_gap {
                 contact.gap
@@ -381,12 +397,13 @@ impl GaussSeidel {
                 spin_levers: [contact.spin[0].1, contact.spin[1].1],
                 spin_push,
                 frame,
-                inv_w: if w > 0.0 { 1.0 / w } else { 0.0 },
+                inv_w_n: if w_n > 0.0 { 1.0 / w_n } else { 0.0 },
+                inv_w: if w_n > 0.0 { 1.0 / w_t } else { 0.0 },
                 mu: contact.mu,
                 sliding: frame.to_local(&contact.sliding_direction),
                 free,
                 r: match warm_start {
-                    Some(forces) if w > 0.0 => frame.to_local(&forces[c]),
+                    Some(forces) if w_n > 0.0 => frame.to_local(&forces[c]),
                     _ => Vector3::zeros(),
                 },
             };
@@ -404,6 +421,7 @@ impl GaussSeidel {
                 let row = &mut self.rows[c];
                 let r = row.update(
                     &row.velocity(&self.dv, &self.dspin),
+                    options.relaxation * row.inv_w_n,
                     options.relaxation * row.inv_w,
                 );
                 let change = r - row.r;
@@ -452,7 +470,7 @@ impl GaussSeidel {
                 natural_map_residual(&row.r, &u, row.mu, row.inv_w)
             } else {
                 // Eq. (10) along `t`: zero exactly at the fixed point of the local update.
-                (row.r - row.update(&u, row.inv_w)).norm()
+                (row.r - row.update(&u, row.inv_w, row.inv_w)).norm()
             };
             max_residual = max_residual.max(residual);
             max_force = max_force.max(row.r.norm());
@@ -485,6 +503,12 @@ fn gather(contact: &ContactPoint, x: &[Vector3<f64>]) -> Vector3<f64> {
 
 /// `W_cc / dt = sum_{k, k'} [node_k = node_k'] w_ck w_ck' inv_mass_k`, exact
 /// even when a node appears twice in the contact.
+/// Largest eigenvalue of the symmetric 2x2 matrix with entries `(a, b, c)`
+/// = `[[a, b], [b, c]]`.
+fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
+    0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
+}
+
 fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
     let mut sum = 0.0;
     for (a, (&ka, &wa)) in contact.nodes.iter().zip(&contact.weights).enumerate() {

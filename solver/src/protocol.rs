@@ -101,6 +101,23 @@ pub enum Protocol {
 /// tried landed 1.8-17 % from the reference at mu = 0.3-0.7, or lost the
 /// snap (BENCHMARKS.md, issue 17's notes).
 pub const ADAPTIVE_MAX_MU: f64 = 0.2;
+/// Whether `params` pull fast far from the snap: [`Protocol::Adaptive`] up
+/// to [`ADAPTIVE_MAX_MU`].
+pub fn pulls_fast(params: &CaseParams) -> bool {
+    params.protocol == Protocol::Adaptive && params.mu <= ADAPTIVE_MAX_MU
+}
+
+/// A case's cost in node-steps, to the order of magnitude: a pull over the
+/// rod's length at `pull_speed` and the largest step, each step linear in
+/// the node count, `FAST_FACTOR` times fewer steps when the approach runs
+/// fast. Queues hand out the costliest cases first, so that a long case does
+/// not start last and leave the other workers idle.
+pub fn work_estimate(params: &CaseParams) -> f64 {
+    let steps = params.length / (params.pull_speed * params.time_step());
+    let fast = if pulls_fast(params) { FAST_FACTOR } else { 1.0 };
+    steps * params.nodes as f64 / fast
+}
+
 /// [`Protocol::Adaptive`]: speed-up far from the snap.
 const FAST_FACTOR: f64 = 16.0;
 /// [`Protocol::Adaptive`]: the largest time step while fast, over the case's.
@@ -501,10 +518,9 @@ impl<'a> Case<'a> {
         l_k_bar(&self.world, self.params)
     }
 
-    /// Whether the pull goes fast far from the snap: [`Protocol::Adaptive`]
-    /// up to [`ADAPTIVE_MAX_MU`].
+    /// Whether the pull goes fast far from the snap ([`pulls_fast`]).
     fn fast(&self) -> bool {
-        self.params.protocol == Protocol::Adaptive && self.params.mu <= ADAPTIVE_MAX_MU
+        pulls_fast(self.params)
     }
 
     /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h

@@ -187,6 +187,20 @@ pub struct NewSweep {
     pub idempotency: Option<Idempotency>,
 }
 
+impl NewSweep {
+    /// The cases with their grid positions in the order they join the queue:
+    /// costliest first ([`solver::protocol::work_estimate`]; ties in grid
+    /// order), so that the sweep's longest case does not start last.
+    pub fn queue_order(&self) -> Vec<(usize, &NewCase)> {
+        let mut order: Vec<(usize, &NewCase)> = self.cases.iter().enumerate().collect();
+        order.sort_by(|a, b| {
+            let cost = |c: &NewCase| solver::protocol::work_estimate(&c.params);
+            cost(b.1).total_cmp(&cost(a.1))
+        });
+        order
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Idempotency {
     pub key: String,
@@ -476,6 +490,35 @@ fn ms(d: Duration) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Fig. 11's sweep: the cases above `ADAPTIVE_MAX_MU` run the whole pull
+    /// slowly and join the queue first, the rest keep their grid order, and
+    /// every case keeps its grid position.
+    #[test]
+    fn queue_order_puts_slow_cases_first() {
+        let cases = [0.1, 0.4, 0.2, 0.6]
+            .map(|mu| {
+                NewCase::new(CaseParams {
+                    mu,
+                    ..CaseParams::default()
+                })
+            })
+            .to_vec();
+        let sweep = NewSweep {
+            name: None,
+            preset: None,
+            spec: serde_json::Value::Null,
+            varied: vec!["mu".to_string()],
+            cases,
+            idempotency: None,
+        };
+        let order: Vec<(usize, f64)> = sweep
+            .queue_order()
+            .iter()
+            .map(|(p, c)| (*p, c.params.mu))
+            .collect();
+        assert_eq!(order, [(1, 0.4), (3, 0.6), (0, 0.1), (2, 0.2)]);
+    }
 
     #[test]
     fn backoff_grows_exponentially_with_jitter_and_is_capped() {

@@ -43,7 +43,7 @@ pub(super) async fn create(
     .await?
     .try_get("id")?;
     let mut cached = 0;
-    for (position, case) in sweep.cases.iter().enumerate() {
+    for (position, case) in sweep.queue_order() {
         // A failed or cancelled row with this key is retired: it keeps its
         // history (and the sweeps that ended with it keep their outcome)
         // under the key `key#id` (`rows::case_from_row` reads the key

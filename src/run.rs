@@ -242,8 +242,13 @@ fn summarise(report: &CaseReport) {
         .iter()
         .map(|span| {
             format!(
-                "{} {:.1} -> {:.1} ({} steps)",
-                span.stage, span.from_l_k_bar, span.to_l_k_bar, span.steps
+                "{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps)",
+                span.stage,
+                span.from_l_k_bar,
+                span.to_l_k_bar,
+                span.steps,
+                span.newton_iterations,
+                span.contact_sweeps
             )
         })
         .collect();

@@ -247,6 +247,12 @@ pub struct StageSpan {
     pub to_l_k_bar: f64,
     /// Time steps taken in it.
     pub steps: u64,
+    /// Newton iterations and contact solve sweeps of those steps (absent
+    /// from reports stored before physics revision 4).
+    #[serde(default)]
+    pub newton_iterations: u64,
+    #[serde(default)]
+    pub contact_sweeps: u64,
 }
 
 /// Progress handed to the caller after every sample.
@@ -587,7 +593,7 @@ impl<'a> Case<'a> {
                 .map_err(|e| Ending::new(Status::Diverged, format!("while relaxing: {e}")))?;
             settled_for += step.dt;
             self.report.stats.relax_steps += 1;
-            self.count_step();
+            self.count_step(&step.report);
             self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
             let rod = &self.world.rods[0];
             let ke = rod.kinetic_energy();
@@ -691,7 +697,7 @@ impl<'a> Case<'a> {
         stats.steps += 1;
         stats.newton_iterations += u64::from(step.newton_iterations);
         stats.contact_sweeps += step.contact_sweeps as u64;
-        self.count_step();
+        self.count_step(&step);
         self.penetration(step.max_penetration, || {
             format!("at l_k bar {:.2}", self.l_k_bar())
         })?;
@@ -790,14 +796,18 @@ impl<'a> Case<'a> {
             from_l_k_bar: at,
             to_l_k_bar: at,
             steps: 0,
+            newton_iterations: 0,
+            contact_sweeps: 0,
         });
     }
 
-    /// Counts a step in the current stage, which now ends here.
-    fn count_step(&mut self) {
+    /// Counts `step` in the current stage, which now ends here.
+    fn count_step(&mut self, step: &WorldStepReport) {
         let at = self.l_k_bar();
         if let Some(span) = self.report.stages.last_mut() {
             span.steps += 1;
+            span.newton_iterations += u64::from(step.newton_iterations);
+            span.contact_sweeps += step.contact_sweeps as u64;
             span.to_l_k_bar = at;
         }
     }

@@ -58,3 +58,30 @@ fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
     let stages: Vec<Stage> = adaptive.stages.iter().map(|s| s.stage).collect();
     assert_eq!(stages, [Stage::Settle, Stage::Reference]);
 }
+
+/// The stages' counters add up to the run's: every step, Newton iteration
+/// and contact sweep of the pull falls in exactly one stage, and the
+/// relaxation's steps in the settling stages.
+#[test]
+fn the_stages_count_every_step_once() {
+    let params = CaseParams {
+        nodes: 158,
+        min_l_k_bar: 300.0,
+        ..CaseParams::default()
+    };
+    let report = protocol::run(&params, &mut |_| true);
+    assert_eq!(report.status, Status::Completed, "{}", report.reason);
+    let (settling, pulling): (Vec<_>, Vec<_>) = report.stages.iter().partition(|s| s.stage == Stage::Settle);
+    let sum = |spans: &[&protocol::StageSpan], f: fn(&protocol::StageSpan) -> u64| {
+        spans.iter().map(|s| f(s)).sum::<u64>()
+    };
+    assert!(!pulling.is_empty(), "{:?}", report.stages);
+    assert_eq!(sum(&pulling, |s| s.steps), report.stats.steps);
+    assert_eq!(
+        sum(&pulling, |s| s.newton_iterations),
+        report.stats.newton_iterations
+    );
+    assert_eq!(sum(&pulling, |s| s.contact_sweeps), report.stats.contact_sweeps);
+    assert_eq!(sum(&settling, |s| s.steps), report.stats.relax_steps);
+    assert!(sum(&pulling, |s| s.contact_sweeps) > 0);
+}

@@ -107,8 +107,7 @@ pub struct World {
     gaps: Vec<usize>,
     contacts: Vec<ContactPoint>,
     pair_ids: Vec<(usize, usize)>,
-    warm_ids: Vec<(usize, usize)>,
-    warm_forces: Vec<Vector3<f64>>,
+    history: ForceHistory,
     warm: Vec<Vector3<f64>>,
     inv_mass: Vec<f64>,
     v_free: Vec<Vector3<f64>>,
@@ -134,8 +133,79 @@ struct Body {
 #[derive(Clone, Default)]
 struct Saved {
     rods: Vec<RodState>,
-    warm_ids: Vec<(usize, usize)>,
-    warm_forces: Vec<Vector3<f64>>,
+    history: ForceHistory,
+}
+
+/// The contact forces of the last two solves, by segment pair, for the
+/// next solve's warm start.
+#[derive(Default)]
+struct ForceHistory {
+    /// Pair ids (sorted) and forces of the last solve, and its step.
+    ids: Vec<(usize, usize)>,
+    forces: Vec<Vector3<f64>>,
+    dt: f64,
+    /// The same for the solve before it.
+    prev_ids: Vec<(usize, usize)>,
+    prev_forces: Vec<Vector3<f64>>,
+    prev_dt: f64,
+}
+
+impl Clone for ForceHistory {
+    fn clone(&self) -> Self {
+        let mut copy = Self::default();
+        copy.clone_from(self);
+        copy
+    }
+
+    /// Reuses this history's buffers (a checkpoint every step allocates nothing).
+    fn clone_from(&mut self, source: &Self) {
+        self.ids.clone_from(&source.ids);
+        self.forces.clone_from(&source.forces);
+        self.dt = source.dt;
+        self.prev_ids.clone_from(&source.prev_ids);
+        self.prev_forces.clone_from(&source.prev_forces);
+        self.prev_dt = source.prev_dt;
+    }
+}
+
+impl ForceHistory {
+    /// The warm start of each of `pair_ids` (sorted) for a step of `dt`:
+    /// where the pair was in contact at the last two solves of this step
+    /// size, the force extrapolated linearly from them (the pull changes
+    /// the forces smoothly, so this is closer to the solution than the last
+    /// force); where only at the last, that force; else zero.
+    fn warm_start(&self, pair_ids: &[(usize, usize)], dt: f64, out: &mut Vec<Vector3<f64>>) {
+        out.clear();
+        let extrapolate = self.dt == dt && self.prev_dt == dt;
+        let (mut k, mut m) = (0, 0);
+        for id in pair_ids {
+            while k < self.ids.len() && self.ids[k] < *id {
+                k += 1;
+            }
+            while m < self.prev_ids.len() && self.prev_ids[m] < *id {
+                m += 1;
+            }
+            let last = (k < self.ids.len() && self.ids[k] == *id).then(|| self.forces[k]);
+            let before = (m < self.prev_ids.len() && self.prev_ids[m] == *id).then(|| self.prev_forces[m]);
+            out.push(match (last, before) {
+                (Some(f1), Some(f0)) if extrapolate => 2.0 * f1 - f0,
+                (Some(f1), _) => f1,
+                _ => Vector3::zeros(),
+            });
+        }
+    }
+
+    /// Records a solve's forces: the last solve becomes the one before.
+    fn push(&mut self, pair_ids: &[(usize, usize)], forces: &[Vector3<f64>], dt: f64) {
+        std::mem::swap(&mut self.ids, &mut self.prev_ids);
+        std::mem::swap(&mut self.forces, &mut self.prev_forces);
+        self.prev_dt = self.dt;
+        self.ids.clear();
+        self.ids.extend_from_slice(pair_ids);
+        self.forces.clear();
+        self.forces.extend_from_slice(forces);
+        self.dt = dt;
+    }
 }
 
 impl World {
@@ -179,8 +249,7 @@ impl World {
             gaps,
             contacts: Vec::new(),
             pair_ids: Vec::new(),
-            warm_ids: Vec::new(),
-            warm_forces: Vec::new(),
+            history: ForceHistory::default(),
             warm: Vec::new(),
             inv_mass: vec![0.0; total],
             v_free: vec![Vector3::zeros(); total],
@@ -195,8 +264,7 @@ impl World {
         for (rod, state) in self.rods.iter().zip(&mut self.saved.rods) {
             rod.save_state(state);
         }
-        self.saved.warm_ids.clone_from(&self.warm_ids);
-        self.saved.warm_forces.clone_from(&self.warm_forces);
+        self.saved.history.clone_from(&self.history);
         self.bodies.iter_mut().for_each(|b| b.stepper.checkpoint());
     }
 
@@ -205,8 +273,7 @@ impl World {
         for (rod, state) in self.rods.iter_mut().zip(&self.saved.rods) {
             rod.load_state(state);
         }
-        self.warm_ids.clone_from(&self.saved.warm_ids);
-        self.warm_forces.clone_from(&self.saved.warm_forces);
+        self.history.clone_from(&self.saved.history);
         self.bodies.iter_mut().for_each(|b| b.stepper.rollback());
     }
 
@@ -367,20 +434,8 @@ impl World {
             }
             force.copy_from_slice(&body.load);
         }
-        // Warm start from the previous step's forces on the same segment pairs.
-        self.warm.clear();
-        let mut k = 0;
-        for id in &self.pair_ids {
-            while k < self.warm_ids.len() && self.warm_ids[k] < *id {
-                k += 1;
-            }
-            let f = if k < self.warm_ids.len() && self.warm_ids[k] == *id {
-                self.warm_forces[k]
-            } else {
-                Vector3::zeros()
-            };
-            self.warm.push(f);
-        }
+        // Warm start from the last steps' forces on the same segment pairs.
+        self.history.warm_start(&self.pair_ids, dt, &mut self.warm);
         let spin = self.contact.rolling.then_some(SpinDofs {
             inv_inertia: &self.spin_inv_inertia,
             free: &self.spin_free,
@@ -422,11 +477,8 @@ impl World {
                 }
             }
         }
-        self.warm_ids.clear();
-        self.warm_ids.extend_from_slice(&self.pair_ids);
-        self.warm_forces.clear();
-        self.warm_forces
-            .extend_from_slice(self.gauss_seidel.contact_forces());
+        self.history
+            .push(&self.pair_ids, self.gauss_seidel.contact_forces(), dt);
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {

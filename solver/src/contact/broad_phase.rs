@@ -181,6 +181,11 @@ pub struct BroadPhase {
     /// Occupied cells with their `slots` range.
     runs: Vec<(Cell, usize, usize)>,
     pairs: Vec<CandidatePair>,
+    /// [`BroadPhase::find_pairs_reusing`]'s candidates: the pairs found
+    /// within `reach`, and every segment's endpoints when they were found.
+    candidates: Vec<(usize, usize)>,
+    anchors: Vec<(Vector3<f64>, Vector3<f64>)>,
+    reach: f64,
 }
 
 /// Cell coordinates are clamped to `+-CELL_LIMIT` (monotone and 1-Lipschitz,
@@ -252,6 +257,57 @@ impl BroadPhase {
             }
         }
         self.pairs.sort_unstable_by_key(|p| (p.i, p.j));
+        Ok(&self.pairs)
+    }
+
+    /// [`BroadPhase::find_pairs`] with a candidate list kept between calls
+    /// (a Verlet list): the grid search runs with `margin + skin`, and later
+    /// calls only test its candidates while no segment endpoint has moved by
+    /// more than `(margin + skin - margin_now) / 2` since, so that no other
+    /// pair can have come within `margin_now` (a point of a segment moves at
+    /// most as far as its farther endpoint). The result is the same as
+    /// [`BroadPhase::find_pairs`]' (the same exact test on the same pairs).
+    pub fn find_pairs_reusing(
+        &mut self,
+        segments: &[Segment],
+        neighbour_gap: &[usize],
+        margin: f64,
+        skin: f64,
+    ) -> Result<&[CandidatePair], BroadPhaseError> {
+        validate(segments, neighbour_gap, margin)?;
+        if !(skin >= 0.0 && skin.is_finite()) {
+            return Err(BroadPhaseError::InvalidMargin(skin));
+        }
+        let moved = if self.anchors.len() == segments.len() {
+            segments
+                .iter()
+                .zip(&self.anchors)
+                .map(|(s, (a, b))| (s.a - a).norm().max((s.b - b).norm()))
+                .fold(0.0f64, f64::max)
+        } else {
+            f64::INFINITY
+        };
+        // Covers rounding in the closest points of either call.
+        let largest = segments.iter().fold(0.0f64, |m, s| m.max(s.radius));
+        let slack = 1e-9 * (2.0 * largest + self.reach);
+        if margin + 2.0 * moved + slack > self.reach {
+            let reach = margin + skin;
+            self.find_pairs(segments, neighbour_gap, reach)?;
+            self.candidates.clear();
+            self.candidates.extend(self.pairs.iter().map(|p| (p.i, p.j)));
+            self.anchors.clear();
+            self.anchors.extend(segments.iter().map(|s| (s.a, s.b)));
+            self.reach = reach;
+        }
+        self.pairs.clear();
+        let Self {
+            candidates, pairs, ..
+        } = self;
+        pairs.extend(
+            candidates
+                .iter()
+                .filter_map(|&(i, j)| narrow_phase(segments, i, j, margin)),
+        );
         Ok(&self.pairs)
     }
 
@@ -492,6 +548,47 @@ pub(crate) mod tests {
                     .collect();
                 (segments, gaps, margin)
             })
+    }
+
+    /// The Verlet list finds what the exhaustive search finds, step after
+    /// step, while a knotted rod drifts, is shaken and then jumps.
+    #[test]
+    fn reused_candidates_give_the_exhaustive_pairs() {
+        use rand::{Rng, SeedableRng, rngs::StdRng};
+        let mut nodes = torus_knot(2.0, 3.0, 0.05, 0.02, 301, 0.95);
+        let radius = 0.004;
+        let gaps = [neighbour_gap(2.0 * radius, 0.002)];
+        let mut rng = StdRng::seed_from_u64(7);
+        let mut broad = BroadPhase::new();
+        let (mut reused, mut found) = (0, 0);
+        for step in 0..200 {
+            let size = match step {
+                150 => 0.01,
+                _ if step % 40 == 39 => 0.002,
+                _ => 1e-4,
+            };
+            for x in nodes.iter_mut() {
+                *x += Vector3::from_fn(|_, _| rng.gen_range(-size..size));
+            }
+            let segments = polyline_segments(&nodes, radius, 0);
+            let margin = 0.001 * (1.0 + (step % 3) as f64);
+            let pairs = broad
+                .find_pairs_reusing(&segments, &gaps, margin, 0.004)
+                .unwrap()
+                .to_vec();
+            reused += usize::from(broad.anchors[0].0 != segments[0].a);
+            found += pairs.len();
+            assert_eq!(
+                pairs,
+                brute_force(&segments, &gaps, margin).unwrap(),
+                "step {step}"
+            );
+        }
+        assert!(found > 1000, "{found} pairs in all");
+        assert!(
+            reused > 100 && reused < 200,
+            "{reused} steps reused the candidates"
+        );
     }
 
     proptest! {

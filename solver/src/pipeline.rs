@@ -212,7 +212,7 @@ impl ForceHistory {
 /// pairs are searched within `margin + SKIN r` and reused until a node has
 /// moved half that far (`BroadPhase::find_pairs_reusing`; the contacts are
 /// the same as a fresh search's). 0.25 r cut the detection time of the
-/// mu = 0.5 case's first 60 k steps from 2.8 s to 1.0 s; 0.5-2 r cut less
+/// mu = 0.5 case's first 60 k steps from 2.9 s to 1.0 s; 0.5-2 r cut less
 /// (BENCHMARKS.md).
 const SKIN: f64 = 0.25;
 

@@ -196,7 +196,7 @@ struct Row {
     inv_w_n: f64,
     /// Inverse of the largest eigenvalue of the block's tangential part
     /// (`w_c` plus the rank-two spin terms); `inv_w_n` without levers.
-    inv_w: f64,
+    inv_w_t: f64,
     mu: f64,
     /// `sliding_direction` in the local frame (zero normal component).
     sliding: Vector3<f64>,
@@ -398,7 +398,7 @@ impl GaussSeidel {
                 spin_push,
                 frame,
                 inv_w_n: if w_n > 0.0 { 1.0 / w_n } else { 0.0 },
-                inv_w: if w_n > 0.0 { 1.0 / w_t } else { 0.0 },
+                inv_w_t: if w_n > 0.0 { 1.0 / w_t } else { 0.0 },
                 mu: contact.mu,
                 sliding: frame.to_local(&contact.sliding_direction),
                 free,
@@ -422,7 +422,7 @@ impl GaussSeidel {
                 let r = row.update(
                     &row.velocity(&self.dv, &self.dspin),
                     options.relaxation * row.inv_w_n,
-                    options.relaxation * row.inv_w,
+                    options.relaxation * row.inv_w_t,
                 );
                 let change = r - row.r;
                 row.push(&change, &mut self.dv, &mut self.dspin);
@@ -464,13 +464,13 @@ impl GaussSeidel {
     /// (they cannot act).
     fn residual(&self) -> f64 {
         let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
-        for row in self.rows.iter().filter(|row| row.inv_w > 0.0) {
+        for row in self.rows.iter().filter(|row| row.inv_w_n > 0.0) {
             let u = row.velocity(&self.dv, &self.dspin);
             let residual = if row.sliding == Vector3::zeros() {
-                natural_map_residual(&row.r, &u, row.mu, row.inv_w)
+                natural_map_residual(&row.r, &u, row.mu, row.inv_w_t)
             } else {
                 // Eq. (10) along `t`: zero exactly at the fixed point of the local update.
-                (row.r - row.update(&u, row.inv_w, row.inv_w)).norm()
+                (row.r - row.update(&u, row.inv_w_t, row.inv_w_t)).norm()
             };
             max_residual = max_residual.max(residual);
             max_force = max_force.max(row.r.norm());
@@ -479,7 +479,7 @@ impl GaussSeidel {
     }
 }
 
-/// The contacts that can act (`w_c > 0`, stored as `inv_w > 0`), evens first, then odds. Contacts
+/// The contacts that can act (`w_c > 0`, stored as `inv_w_n > 0`), evens first, then odds. Contacts
 /// come from detection sorted by segment pair, so neighbours in that list
 /// usually share nodes and each update would wait for the previous one's
 /// velocity correction; two apart they rarely do, and the processor overlaps
@@ -487,7 +487,7 @@ impl GaussSeidel {
 fn sweep_order(rows: &[Row], order: &mut Vec<usize>) {
     order.clear();
     for parity in [0, 1] {
-        order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].inv_w > 0.0));
+        order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].inv_w_n > 0.0));
     }
 }
 
@@ -501,14 +501,14 @@ fn gather(contact: &ContactPoint, x: &[Vector3<f64>]) -> Vector3<f64> {
         .fold(Vector3::zeros(), |acc, (&k, &wk)| acc + wk * x[k])
 }
 
-/// `W_cc / dt = sum_{k, k'} [node_k = node_k'] w_ck w_ck' inv_mass_k`, exact
-/// even when a node appears twice in the contact.
 /// Largest eigenvalue of the symmetric 2x2 matrix with entries `(a, b, c)`
 /// = `[[a, b], [b, c]]`.
 fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
     0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
 }
 
+/// `W_cc / dt = sum_{k, k'} [node_k = node_k'] w_ck w_ck' inv_mass_k`, exact
+/// even when a node appears twice in the contact.
 fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
     let mut sum = 0.0;
     for (a, (&ka, &wa)) in contact.nodes.iter().zip(&contact.weights).enumerate() {

@@ -192,12 +192,14 @@ impl NewSweep {
     /// costliest first ([`solver::protocol::work_estimate`]; ties in grid
     /// order), so that the sweep's longest case does not start last.
     pub fn queue_order(&self) -> Vec<(usize, &NewCase)> {
-        let mut order: Vec<(usize, &NewCase)> = self.cases.iter().enumerate().collect();
-        order.sort_by(|a, b| {
-            let cost = |c: &NewCase| solver::protocol::work_estimate(&c.params);
-            cost(b.1).total_cmp(&cost(a.1))
-        });
+        let mut order: Vec<(f64, usize, &NewCase)> = (self.cases.iter().enumerate())
+            .map(|(position, case)| (solver::protocol::work_estimate(&case.params), position, case))
+            .collect();
+        order.sort_by(|a, b| b.0.total_cmp(&a.0));
         order
+            .into_iter()
+            .map(|(_, position, case)| (position, case))
+            .collect()
     }
 }
 

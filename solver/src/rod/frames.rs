@@ -7,15 +7,25 @@ use nalgebra::Vector3;
 /// `a x b` that takes `a` to `b` (the minimal rotation).
 #[inline]
 pub fn parallel_transport(v: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
-    let c = a.cross(b);
-    let d = a.dot(b);
+    transport_by(v, a, &a.cross(b), a.dot(b))
+}
+
+/// [`parallel_transport`] given `c = a x b` and `d = a . b` (the curvature
+/// binormal's ingredients, which the caller already has).
+#[inline(always)]
+pub fn transport_by(v: &Vector3<f64>, a: &Vector3<f64>, c: &Vector3<f64>, d: f64) -> Vector3<f64> {
     if 1.0 + d > 1e-12 {
         v * d + c.cross(v) + c * (c.dot(v) / (1.0 + d))
     } else {
-        // Antiparallel tangents: any axis normal to `a` is a minimal rotation by pi.
-        let k = perpendicular(a);
-        -v + k * (2.0 * k.dot(v))
+        half_turn(v, a)
     }
+}
+
+/// Antiparallel tangents: any axis normal to `a` is a minimal rotation by pi.
+#[cold]
+fn half_turn(v: &Vector3<f64>, a: &Vector3<f64>) -> Vector3<f64> {
+    let k = perpendicular(a);
+    -v + k * (2.0 * k.dot(v))
 }
 
 /// A unit vector perpendicular to the unit vector `a`.
@@ -38,7 +48,13 @@ pub fn signed_angle(u: &Vector3<f64>, v: &Vector3<f64>, n: &Vector3<f64>) -> f64
 #[inline]
 pub fn unwrap_near(angle: f64, near: f64) -> f64 {
     let two_pi = std::f64::consts::TAU;
-    angle + two_pi * ((near - angle) / two_pi).round()
+    let turns = (near - angle) / two_pi;
+    // Within half a turn (the usual case) `turns` rounds to zero: skip the call.
+    if turns.abs() < 0.5 {
+        angle
+    } else {
+        angle + two_pi * turns.round()
+    }
 }
 
 #[cfg(test)]
@@ -71,5 +87,9 @@ mod tests {
         assert!((signed_angle(&u, &v, &n) - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((signed_angle(&v, &u, &n) + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((unwrap_near(0.1, 6.3) - (0.1 + std::f64::consts::TAU)).abs() < 1e-15);
+        // Within half a turn the angle stays; just beyond, it moves by a turn.
+        assert_eq!(unwrap_near(3.0, -0.1), 3.0);
+        assert!((unwrap_near(3.2, 0.0) - (3.2 - std::f64::consts::TAU)).abs() < 1e-15);
+        assert!((unwrap_near(-3.2, 0.0) - (-3.2 + std::f64::consts::TAU)).abs() < 1e-15);
     }
 }

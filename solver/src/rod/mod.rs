@@ -5,7 +5,7 @@
 pub mod frames;
 
 use crate::material::{Material, Section};
-use frames::{parallel_transport, perpendicular, signed_angle, unwrap_near};
+use frames::{parallel_transport, perpendicular, signed_angle, transport_by, unwrap_near};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -309,13 +309,14 @@ impl Rod {
         for i in 1..ne {
             let te = g.tangent[i - 1];
             let tf = g.tangent[i];
-            let kb = te.cross(&tf) * (2.0 / (1.0 + te.dot(&tf)));
+            let (c, d) = (te.cross(&tf), te.dot(&tf));
+            let kb = c * (2.0 / (1.0 + d));
             g.kb[i] = kb;
             g.kappa[i] = [
                 0.5 * (g.m2[i - 1] + g.m2[i]).dot(&kb),
                 -0.5 * (g.m1[i - 1] + g.m1[i]).dot(&kb),
             ];
-            let u = parallel_transport(&g.d1[i - 1], &te, &tf);
+            let u = transport_by(&g.d1[i - 1], &te, &c, d);
             let raw = signed_angle(&u, &g.d1[i], &tf);
             g.ref_twist[i] = unwrap_near(raw, self.ref_twist_old[i]);
         }

@@ -255,8 +255,20 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     let points = browser
         .until("the phase diagram", "const p = document.getElementById('phase'); return p && p.dataset.points !== undefined && p.dataset.points", Duration::from_secs(30))
         .await;
-    let inverted = sweep_inversions(&c, &url, id).await;
+    let (inverted, loaded) = sweep_inversions(&c, &url, id).await;
     assert_eq!(points, json!(inverted.to_string()), "one point per inverted case");
+    // Events through which F bar does not fall are drawn hollow and listed.
+    let (hollow, note) = browser
+        .js(
+            "const p = document.getElementById('phase'); return [p.dataset.loaded, document.getElementById('phase-note').textContent]",
+            json!([]),
+        )
+        .await
+        .as_array()
+        .map(|a| (a[0].clone(), a[1].as_str().unwrap_or_default().to_string()))
+        .unwrap();
+    assert_eq!(hollow, json!(loaded.to_string()), "hollow points: {note}");
+    assert_eq!(note.contains("F bar does not fall"), loaded > 0, "{note}");
     let canvases = browser
         .js(
             "return document.querySelectorAll('#main canvas').length",
@@ -363,13 +375,20 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     server.shutdown().await.unwrap();
 }
 
-/// Cases of the sweep with an inversion.
-async fn sweep_inversions(c: &reqwest::Client, url: &str, id: i64) -> usize {
+/// Cases of the sweep with an inversion, and those among them through which
+/// F bar does not fall.
+async fn sweep_inversions(c: &reqwest::Client, url: &str, id: i64) -> (usize, usize) {
     let (_, pd) = get(c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
-    pd["points"]
+    let inverted: Vec<&Value> = pd["points"]
         .as_array()
         .unwrap()
         .iter()
-        .filter(|p| !p["inversion"].is_null())
-        .count()
+        .map(|p| &p["inversion"])
+        .filter(|i| !i.is_null())
+        .collect();
+    let loaded = inverted
+        .iter()
+        .filter(|i| i["F_bar_after"].as_f64() >= i["F_bar_before"].as_f64())
+        .count();
+    (inverted.len(), loaded)
 }

@@ -40,6 +40,10 @@ pub struct InversionPoint {
     /// H bar before and after the drop.
     pub h_bar_before: f64,
     pub h_bar_after: f64,
+    /// Peak kinetic energy around the drop over its median before it. With
+    /// `F_bar_after >= F_bar_before` it tells a snap (tens) from a loop that
+    /// lies down while the pull keeps loading it (5-10; docs/FIDELITY.md).
+    pub kinetic_energy_ratio: f64,
 }
 
 impl From<&solver::measurements::Inversion> for InversionPoint {
@@ -51,6 +55,7 @@ impl From<&solver::measurements::Inversion> for InversionPoint {
             f_bar_after: i.f_bar_after,
             h_bar_before: i.h_bar_before,
             h_bar_after: i.h_bar_after,
+            kinetic_energy_ratio: i.kinetic_energy_ratio,
         }
     }
 }

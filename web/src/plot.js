@@ -75,19 +75,28 @@ export function overlay(el, { title, x, y, curves, width }) {
   };
 }
 
-/** Points (x, y), one per case, and a dashed reference line [[x, y]...] (may be empty). */
-export function scatter(el, { title, x, y, points, reference, width }) {
-  const xs = [...new Set([...points, ...reference].map((p) => p[0]))].sort((a, b) => a - b);
+/**
+ * Points (x, y), one per case: `points` (filled) where F bar falls through the
+ * event, `loaded` (hollow) where it does not; and a dashed reference line
+ * [[x, y]...]. Either list may be empty.
+ */
+export function scatter(el, { title, x, y, points, loaded, reference, width }) {
+  const xs = [...new Set([...points, ...loaded, ...reference].map((p) => p[0]))].sort((a, b) => a - b);
   const pick = (list) => xs.map((v) => { const p = list.find((q) => q[0] === v); return p ? p[1] : null; });
   const a = axisColours();
   const series = [{ label: x }, { label: "inversion (full model)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, fill: "#0072b2" } }];
   const data = [xs, pick(points)];
+  if (loaded.length) {
+    series.push({ label: "F bar does not fall (see the note below)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, width: 2, fill: "transparent" } });
+    data.push(pick(loaded));
+  }
   if (reference.length) {
     series.push({ label: "simplified model (Sec. 5)", stroke: "#d55e00", dash: [6, 4], width: 1.5, spanGaps: true, points: { show: false } });
     data.push(pick(reference));
   }
   el.innerHTML = "";
-  el.dataset.points = String(points.length);
+  el.dataset.points = String(points.length + loaded.length);
+  el.dataset.loaded = String(loaded.length);
   return new uPlot({
     title,
     width: width || Math.min(720, el.clientWidth || 720),

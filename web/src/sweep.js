@@ -104,7 +104,13 @@ async function refresh(state) {
   const pd = await get(`/api/sweeps/${id}/phase-diagram`);
   if (axisName) {
     const scale = axisName === "h" ? 1e3 : 1;
-    const points = pd.points.filter((p) => p.inversion).map((p) => [Number(p.params[axisName]) * scale, p.inversion.l_k_bar]);
+    // A snap releases the pull (F bar falls); an event through which F bar
+    // keeps rising is drawn hollow and listed (docs/FIDELITY.md, "Left open").
+    const inverted = pd.points.filter((p) => p.inversion);
+    const rising = (p) => p.inversion.F_bar_after >= p.inversion.F_bar_before;
+    const at = (p) => [Number(p.params[axisName]) * scale, p.inversion.l_k_bar];
+    const points = inverted.filter((p) => !rising(p)).map(at);
+    const loaded = inverted.filter(rising).map(at);
     // The simplified model applies against n and h (the paper's Figs 14 and 15).
     const reference = axisName === "n" || axisName === "h"
       ? pd.points.filter((p) => p.simplified_l_k_bar !== null).map((p) => [Number(p.params[axisName]) * scale, p.simplified_l_k_bar])
@@ -114,10 +120,16 @@ async function refresh(state) {
       x: axisName === "h" ? "h (mm)" : axisName,
       y: "critical l_k bar",
       points,
+      loaded,
       reference,
     });
     const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
-    $("#phase-note").textContent = none.length ? "Without an inversion: " + none.join("; ") : "";
+    const held = inverted.filter(rising).map((p) => `${axisName} = ${p.params[axisName]} (F bar × ${fmt(p.inversion.F_bar_after / p.inversion.F_bar_before, 3)}, kinetic energy × ${fmt(p.inversion.kinetic_energy_ratio, 1)})`);
+    $("#phase-note").textContent = [
+      none.length ? "Without an inversion: " + none.join("; ") + "." : "",
+      held.length ? "F bar does not fall through the event at " + held.join("; ") +
+        ". A kinetic energy tens of times its median marks a snap; 5-10 times marks a loop lying down while the pull keeps loading it (docs/FIDELITY.md)." : "",
+    ].filter(Boolean).join(" ");
   } else {
     $("#phase").textContent = pd.points[0] && pd.points[0].inversion ? `Inversion at l_k bar ${fmt(pd.points[0].inversion.l_k_bar)}` : "A single case: no axis to plot.";
   }

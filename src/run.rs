@@ -219,10 +219,17 @@ fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
 fn summarise(report: &CaseReport) {
     println!("status: {} {}", report.status, report.reason);
     match &report.inversion {
-        Some(inv) => println!(
-            "inversion at l_k bar {:.2} (l_c/L {:.4}), F bar {:.4} -> {:.4}",
-            inv.l_k_bar, inv.l_c_over_l, inv.f_bar_before, inv.f_bar_after
-        ),
+        Some(inv) => {
+            println!(
+                "inversion at l_k bar {:.2} (l_c/L {:.4}), F bar {:.4} -> {:.4}, kinetic energy {:.1} times its median",
+                inv.l_k_bar, inv.l_c_over_l, inv.f_bar_before, inv.f_bar_after, inv.kinetic_energy_ratio
+            );
+            if inv.f_bar_after >= inv.f_bar_before {
+                println!(
+                    "note: F bar does not fall through this event; a kinetic energy tens of times its median marks a snap, 5-10 times a loop lying down under the pull (docs/FIDELITY.md)"
+                );
+            }
+        }
         None => println!("no inversion"),
     }
     let s = &report.stats;

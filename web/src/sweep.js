@@ -104,8 +104,9 @@ async function refresh(state) {
   const pd = await get(`/api/sweeps/${id}/phase-diagram`);
   if (axisName) {
     const scale = axisName === "h" ? 1e3 : 1;
-    // A snap releases the pull (F bar falls); an event through which F bar
-    // keeps rising is drawn hollow and listed (docs/FIDELITY.md, "Left open").
+    // Snaps nearly always release the pull (F bar falls). An event through which
+    // F bar keeps rising is drawn hollow and listed with its kinetic-energy
+    // ratio, which tells a snap from a loop lying down (docs/FIDELITY.md).
     const inverted = pd.points.filter((p) => p.inversion);
     const rising = (p) => p.inversion.F_bar_after >= p.inversion.F_bar_before;
     const at = (p) => [Number(p.params[axisName]) * scale, p.inversion.l_k_bar];

@@ -3,9 +3,13 @@
 //! step together, as a step in the middle of a pull. At K = 301 (the paper's
 //! mesh, dt = 1 ms) and at K = 601 and 1201 with the time step scaled as
 //! `CaseParams::time_step` does (with the square of the edge length), so that
-//! the cost per node shows whether a step is linear in K.
+//! the cost per node shows whether a step is linear in K. Friction as the
+//! case defaults have it (at the centre lines); at K = 301 also with the
+//! implicit contact solve (`contact_solve = implicit`).
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use nalgebra::Vector3;
+use solver::case::CaseParams;
+use solver::contact::ContactSolve;
 use solver::external::Environment;
 use solver::knot::{self, KnotSpec};
 use solver::material::Material;
@@ -19,7 +23,7 @@ fn time_step(nodes: usize) -> f64 {
     1e-3 * (300.0 / (nodes - 1) as f64).powi(2)
 }
 
-fn relaxed_knot(nodes: usize) -> World {
+fn relaxed_knot(nodes: usize, solve: ContactSolve) -> World {
     let spec = KnotSpec {
         nodes,
         ..KnotSpec::paper(3)
@@ -38,7 +42,12 @@ fn relaxed_knot(nodes: usize) -> World {
         damping: 20.0,
     };
     let dt = time_step(nodes);
-    let mut world = World::new(vec![rod], env, ContactOptions::default(), newton);
+    let contact = ContactOptions {
+        rolling: CaseParams::default().rolling,
+        solve,
+        ..ContactOptions::default()
+    };
+    let mut world = World::new(vec![rod], env, contact, newton);
     for _ in 0..300 {
         world.step(dt).expect("relaxation step");
     }
@@ -54,14 +63,19 @@ fn relaxed_knot(nodes: usize) -> World {
 }
 
 fn bench(c: &mut Criterion) {
-    for nodes in [301, 601, 1201] {
-        let world = relaxed_knot(nodes);
+    for (nodes, solve) in [
+        (301, ContactSolve::Explicit),
+        (601, ContactSolve::Explicit),
+        (1201, ContactSolve::Explicit),
+        (301, ContactSolve::Implicit),
+    ] {
+        let world = relaxed_knot(nodes, solve);
         let dt = time_step(nodes);
         // The step's work, in the name: the cost per node is comparable
         // between meshes only at equal sweeps and Newton iterations.
         let r = world.clone().step(dt).expect("step");
         let name = format!(
-            "knot/time_step_n3_K{nodes}_{}contacts_{}sweeps_{}newton",
+            "knot/time_step_n3_K{nodes}_{solve:?}_{}contacts_{}sweeps_{}newton",
             r.contacts, r.contact_sweeps, r.newton_iterations
         );
         c.bench_function(&name, |b| {

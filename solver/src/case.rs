@@ -1,8 +1,8 @@
 //! The one definition of a knot case's parameters, with the paper's defaults,
 //! shared by the CLI, the API, the queue and the solver. SI units.
-pub use crate::contact::FrictionLaw;
 use crate::contact::broad_phase::neighbour_gap;
 use crate::contact::segment::closest_points;
+pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{self, KnotError, KnotShape, KnotSpec};
 pub use crate::protocol::Protocol;
 use nalgebra::Vector3;
@@ -20,7 +20,12 @@ use serde::{Deserialize, Serialize};
 /// largest eigenvalue, and starts from the forces extrapolated from the last
 /// two steps: the same solutions, reached in about a sixth of the sweeps, so
 /// each step's forces are closer to them at the same tolerance.
-pub const PHYSICS_REVISION: u32 = 4;
+/// Revision 5: the paper's model and start: friction at the centre lines
+/// (`rolling` false), the knot starts with the paper's code's twist
+/// (`start_twist`, linking number 2n), the reference pull is the default
+/// protocol, and F bar is the clamp force averaged over each sample's
+/// interval (docs/FIDELITY.md).
+pub const PHYSICS_REVISION: u32 = 5;
 
 /// Parameters of one overhand-knot tightening case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -36,11 +41,24 @@ pub struct CaseParams {
     /// (Coulomb's disk |F_t| <= mu F_n, default) or `sliding_direction` (only
     /// along the previous step's sliding direction; fails the capstan check).
     pub friction_law: FrictionLaw,
-    /// Friction acts at the rods' surfaces (default): a contact's slip
-    /// includes the surfaces' spin about each rod's axis, and friction
-    /// torques the twist, so a rod can roll on another. `false`: friction
-    /// at the centre lines (no rolling).
+    /// Friction acts at the rods' surfaces: a contact's slip includes the
+    /// surfaces' spin about each rod's axis, and friction torques the twist,
+    /// so a rod can roll on another. `false` (default): friction at the centre
+    /// lines, as in the paper's method and code (docs/FIDELITY.md).
     pub rolling: bool,
+    /// How each step's contact forces see the rods' response: `explicit`
+    /// (the paper's method, mass-only Delassus operator) or `implicit` (the
+    /// compliance of the implicit step that follows, [`ContactSolve`]).
+    pub contact_solve: ContactSolve,
+    /// Which segment pairs get a contact force each step: `detected` (every
+    /// pair within reach at the start of the step) or `predicted` (the
+    /// paper's code: the pairs a contact-free predictor step brings into
+    /// contact, [`Candidates`]).
+    pub contact_candidates: Candidates,
+    /// Twist (turns) the knot starts with between its clamps, spread evenly
+    /// along the rod; `None`: the paper's code's, linking number 2n with the
+    /// sign of the knot's writhe ([`crate::knot::paper_twist`]).
+    pub start_twist: Option<f64>,
     /// Gravitational acceleration (m/s^2), a vector; the paper's simulations: zero.
     pub gravity: [f64; 3],
     /// Rod length L (m); paper: 1 m.
@@ -55,8 +73,8 @@ pub struct CaseParams {
     pub density: f64,
     /// Pulling speed of each clamp (m/s); the paper's text 1 mm/s, its code 3 mm/s.
     pub pull_speed: f64,
-    /// How the pull is scheduled: `adaptive` (fast far from the snap, slow
-    /// through it; the default) or `reference` (at `pull_speed` throughout).
+    /// How the pull is scheduled: `reference` (at `pull_speed` throughout;
+    /// the default) or `adaptive` (fast far from the snap, slow through it).
     pub protocol: Protocol,
     /// Time step (s), the largest one with `adaptive_dt`; `None`: the automatic
     /// step of [`CaseParams::time_step`] (0.5 ms at L = 1 m, K = 301).
@@ -102,7 +120,10 @@ impl Default for CaseParams {
             h: 1.6e-3,
             mu: 0.1,
             friction_law: FrictionLaw::default(),
-            rolling: true,
+            rolling: false,
+            contact_solve: ContactSolve::default(),
+            contact_candidates: Candidates::default(),
+            start_twist: None,
             gravity: [0.0; 3],
             length: 1.0,
             nodes: 301,
@@ -182,7 +203,19 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "rolling",
-        doc: "Friction acts at the rods' surfaces (default true): a contact's slip includes each rod's spin about its axis and friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g sin alpha). false: friction at the centre lines.",
+        doc: "Friction acts at the rods' surfaces: a contact's slip includes each rod's spin about its axis and friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g sin alpha). false (default): friction at the centre lines, as in the paper's method and code, which with the paper's start twist reproduces Figs 1, 7, 9 and 11; true inverts 9-10 % later (n = 3: 124, n = 4: 193) and loses the clean snap at h = 3.4 mm, mu >= 0.4 (docs/FIDELITY.md).",
+    },
+    Parameter {
+        name: "contact_solve",
+        doc: "How each step's contact forces see the rods' response: \"explicit\" (default; the paper's method: free velocities v + dt M^-1 F and the mass-only Delassus operator, the forces then held fixed in the implicit step) or \"implicit\" (the free velocities of a contact-free implicit step and the Delassus operator of its Newton matrix, so a sticking contact holds for the motion the step takes; costs a banded solve per contact axis each step).",
+    },
+    Parameter {
+        name: "contact_candidates",
+        doc: "Which segment pairs get a contact force each step: \"detected\" (default: every pair within reach at the start of the step, one of two pairs meeting at a shared node) or \"predicted\" (as the paper's code: only the pairs that a contact-free implicit predictor step brings closer than 2h, so a touching pair that the predictor pulls apart gets no force in that step; costs a second Newton solve per step).",
+    },
+    Parameter {
+        name: "start_twist",
+        doc: "Twist (turns) the knot starts with between its clamps, spread evenly along the rod: -20..=20. null (default): the paper's code's, which gives the rod the linking number 2n with the pull axis (sign of the knot's writhe), about +1.0 to +1.3 turns for the builder's knots n = 1..5 (writhe -3.0 to -11.3); 0: none, as if the knot's ends had turned freely while it was tied. The report gives the twist used and the knot's writhe.",
     },
     Parameter {
         name: "gravity",
@@ -214,7 +247,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "protocol",
-        doc: "How the clamps move: \"adaptive\" (default) ramps up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the result depends on the pulling path (BENCHMARKS.md). \"reference\" pulls at pull_speed throughout, as in the paper.",
+        doc: "How the clamps move: \"reference\" (default) pulls at pull_speed throughout, as in the paper. \"adaptive\" ramps up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the result depends on the pulling path. Its inversion lies within 1 % of the reference's at a tenth of the cost, but its fast approach reads F bar 5-20 % high (BENCHMARKS.md, \"Pull protocols\"): a quick look, not the curves.",
     },
     Parameter {
         name: "dt",
@@ -356,6 +389,13 @@ impl CaseParams {
                 self.h
             ),
         );
+        if let Some(v) = self.start_twist {
+            check(
+                finite_in(v, -20.0, 20.0),
+                "start_twist",
+                format!("must be in [-20, 20] turns, got {v}"),
+            );
+        }
         check(
             finite_in(self.mu, 0.0, 2.0),
             "mu",

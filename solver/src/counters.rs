@@ -13,6 +13,9 @@ pub struct Counters {
     pub contact_solve: Duration,
     /// Implicit rod steps (Newton).
     pub dynamics: Duration,
+    /// Steps whose implicit contact solve fell back to the explicit one
+    /// (a rod's contact-free step needed substeps).
+    pub explicit_fallbacks: u64,
 }
 
 impl Counters {

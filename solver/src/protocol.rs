@@ -75,6 +75,7 @@ impl std::fmt::Display for Stage {
 #[serde(rename_all = "snake_case")]
 pub enum Protocol {
     /// The whole pull at `pull_speed` (the paper's protocol).
+    #[default]
     Reference,
     /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
     /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
@@ -90,7 +91,8 @@ pub enum Protocol {
     /// approaches fast again; a fast approach that reaches the end of the
     /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
     /// whole pull is the reference's. The report's `stages` list what ran.
-    #[default]
+    /// Its inversion lies within 1 % of the reference's, but the fast
+    /// approach reads F bar 5-20 % high (BENCHMARKS.md, "Pull protocols").
     Adaptive,
 }
 
@@ -209,6 +211,12 @@ pub struct CaseReport {
     /// Knot determinant of the initial shape and at the end (2n + 1 expected).
     pub determinant_initial: Option<u64>,
     pub determinant_final: Option<u64>,
+    /// Writhe of the start shape (closed by tails along the pull axis) and
+    /// the twist (turns) it started with (`start_twist`, or the paper's code's).
+    #[serde(default)]
+    pub writhe: f64,
+    #[serde(default)]
+    pub start_twist: f64,
     /// The inversion point, `None` when H bar never snapped.
     pub inversion: Option<Inversion>,
     pub series: Vec<Sample>,
@@ -229,6 +237,8 @@ impl CaseReport {
             params,
             determinant_initial: None,
             determinant_final: None,
+            writhe: 0.0,
+            start_twist: 0.0,
             inversion: None,
             series: Vec::new(),
             frames: Vec::new(),
@@ -351,6 +361,11 @@ fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, Wo
         density: params.density,
     };
     let mut rod = Rod::new(&shape.points, params.h, material).map_err(|e| format!("rod: {e}"))?;
+    report.writhe = knot::writhe(&shape.points);
+    report.start_twist = params
+        .start_twist
+        .unwrap_or_else(|| knot::paper_twist(params.n, report.writhe));
+    rod.add_twist(report.start_twist);
     rod.clamp(End::Start);
     rod.clamp(End::Finish);
     let newton = NewtonOptions {
@@ -362,6 +377,8 @@ fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, Wo
         friction: params.mu,
         friction_law: params.friction_law,
         rolling: params.rolling,
+        solve: params.contact_solve,
+        candidates: params.contact_candidates,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
             ..defaults.solver
@@ -373,6 +390,15 @@ fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, Wo
         damping: RELAX_DAMPING,
     };
     Ok((shape, World::new(vec![rod], env, contact, newton)))
+}
+
+/// The pulling force (N) the clamps exert along `axis` after the last step:
+/// the mean of the two clamps' reactions along the pull.
+fn clamp_force(world: &World, axis: &Vector3<f64>) -> f64 {
+    let (rod, stepper) = (&world.rods[0], world.stepper(0));
+    let start = -stepper.clamp_reaction(rod, End::Start).0.dot(axis);
+    let finish = stepper.clamp_reaction(rod, End::Finish).0.dot(axis);
+    0.5 * (start + finish)
 }
 
 /// The force unit of F bar: EI / h^2 (eq. 11).
@@ -407,6 +433,9 @@ struct Pull {
     mid: usize,
     time: f64,
     peak_kinetic_energy: f64,
+    /// The clamp force (N) integrated over time since the last sample, and that time (s).
+    impulse: f64,
+    impulse_time: f64,
     stage: Stage,
     /// l_k bar where `stage` began.
     stage_start: f64,
@@ -635,6 +664,8 @@ impl<'a> Case<'a> {
             mid: loop_middle,
             time: 0.0,
             peak_kinetic_energy: 0.0,
+            impulse: 0.0,
+            impulse_time: 0.0,
             stage,
             stage_start: start_l_k_bar,
             fast_snap: None,
@@ -693,6 +724,8 @@ impl<'a> Case<'a> {
         };
         pull.time += dt;
         pull.peak_kinetic_energy = pull.peak_kinetic_energy.max(self.world.rods[0].kinetic_energy());
+        pull.impulse += dt * clamp_force(&self.world, &pull.axis);
+        pull.impulse_time += dt;
         let stats = &mut self.report.stats;
         stats.steps += 1;
         stats.newton_iterations += u64::from(step.newton_iterations);
@@ -853,10 +886,12 @@ impl<'a> Case<'a> {
     ) -> Vec<Vector3<f64>> {
         let params = self.params;
         let rod = &self.world.rods[0];
-        let stepper = self.world.stepper(0);
-        let f_start = -stepper.clamp_reaction(rod, End::Start).0.dot(&pull.axis);
-        let f_finish = stepper.clamp_reaction(rod, End::Finish).0.dot(&pull.axis);
-        let force = 0.5 * (f_start + f_finish);
+        let force = if pull.impulse_time > 0.0 {
+            pull.impulse / pull.impulse_time
+        } else {
+            clamp_force(&self.world, &pull.axis)
+        };
+        (pull.impulse, pull.impulse_time) = (0.0, 0.0);
         let points = rod.positions();
         let pairs = self.world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
         let braid = measurements::braid(pairs, pull.mid);

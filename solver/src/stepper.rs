@@ -163,13 +163,7 @@ impl Stepper {
         extra: Option<&[f64]>,
         dt: f64,
     ) -> Result<StepReport, StepError> {
-        self.ext.fill(0.0);
-        gravity::add(rod, &env.gravity, &mut self.ext);
-        if let Some(f) = extra {
-            for (e, x) in self.ext.iter_mut().zip(f) {
-                *e += x;
-            }
-        }
+        self.set_external(rod, env, extra);
         let mut report = StepReport {
             min_dt: dt,
             ..Default::default()
@@ -207,6 +201,69 @@ impl Stepper {
         }
         self.grad_q.copy_from_slice(&rod.q);
         Ok(report)
+    }
+
+    /// The linearly implicit step: one Newton iteration of the step of length
+    /// `dt` under `env` and `extra` from the guess `q_0 + dt v_0`, with the
+    /// factorisation at hand when it is one of a step of that length (as
+    /// [`Stepper::step`] reuses it), else one assembled at the guess.
+    /// `velocity` gets `(q_1 - q_0) / dt` (prescribed at fixed DOFs). The rod
+    /// is left at its last accepted state and the matrix factored for
+    /// [`Stepper::solve_newton`]: a contact problem linearised about the
+    /// start of the step.
+    pub fn linear_step(
+        &mut self,
+        rod: &mut Rod,
+        env: &Environment,
+        extra: Option<&[f64]>,
+        dt: f64,
+        velocity: &mut [f64],
+    ) -> Result<(), NewtonFailure> {
+        self.set_external(rod, env, extra);
+        let c_in = env.damping_factor(dt) / (dt * dt);
+        guess(rod, dt);
+        let reuse = self.options.reuse_factorization && self.factored_c_in == Some(c_in);
+        let energies = energies::evaluate(
+            rod,
+            Terms::ALL,
+            &mut self.grad,
+            (!reuse).then_some(&mut self.hess),
+        );
+        if !reuse {
+            self.factor(rod, c_in)?;
+        }
+        self.residual_and_potential(rod, dt, c_in, energies.total());
+        for j in 0..rod.ndof() {
+            self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
+        }
+        self.ldlt[self.active].solve_in_place(&mut self.delta);
+        for (v, ((q, d), q0)) in velocity
+            .iter_mut()
+            .zip(rod.q.iter().zip(&self.delta).zip(&rod.q_old))
+        {
+            *v = (q + d - q0) / dt;
+        }
+        rod.restore();
+        Ok(())
+    }
+
+    /// Applies the inverse of the factored Newton matrix `A = c_in M + H_E`
+    /// (fixed DOFs held) of a step of length `dt` under `env` to `b`, in
+    /// place: to first order, the extra displacement of that step under the
+    /// extra generalised force `b`. Entries at fixed DOFs are ignored and come
+    /// out zero. `false` (and `b` unchanged) when the factorisation at hand is
+    /// not one of a step of that length.
+    pub fn solve_newton(&self, rod: &Rod, env: &Environment, dt: f64, b: &mut [f64]) -> bool {
+        if self.factored_c_in != Some(env.damping_factor(dt) / (dt * dt)) {
+            return false;
+        }
+        for (x, fixed) in b.iter_mut().zip(&rod.fixed) {
+            if *fixed {
+                *x = 0.0;
+            }
+        }
+        self.ldlt[self.active].solve_in_place(b);
+        true
     }
 
     /// The elastic gradient (eq. 6) at `rod`'s current DOFs when the last
@@ -265,15 +322,7 @@ impl Stepper {
         let floor = 100.0 * f64::EPSILON * rod.section.ea * extent / edge;
         let f_tol = (self.options.rtol * self.force_scale(rod, env)).max(floor);
         let m_tol = f_tol * edge;
-        for j in 0..rod.ndof() {
-            let v = if rod.fixed[j] {
-                rod.prescribed_velocity[j]
-            } else {
-                rod.velocity[j]
-            };
-            rod.q[j] = rod.q_old[j] + h * v;
-        }
-        rod.update_geometry();
+        guess(rod, h);
         let reuse = self.options.reuse_factorization && self.factored_c_in == Some(c_in);
         let mut energies = if reuse {
             energies::evaluate(rod, Terms::ALL, &mut self.grad, None)
@@ -302,22 +351,7 @@ impl Stepper {
                 if !hessian_current {
                     energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
                 }
-                for j in 0..rod.ndof() {
-                    self.hess.add_diagonal(j, c_in * rod.mass[j]);
-                    if rod.fixed[j] {
-                        self.hess.constrain(j);
-                    }
-                }
-                if self.saved.is_some_and(|(kept, _)| kept == self.active) {
-                    self.active = 1 - self.active;
-                }
-                self.factored_c_in = None;
-                let inertia = self.ldlt[self.active]
-                    .factor(&self.hess)
-                    .map_err(|_| (NewtonFailure::Singular, iteration))?;
-                self.factored_c_in = Some(c_in);
-                self.factorizations += 1;
-                negative_pivots = inertia.negative;
+                negative_pivots = self.factor(rod, c_in).map_err(|f| (f, iteration))?;
             }
             let mut slope = 0.0;
             for j in 0..rod.ndof() {
@@ -377,6 +411,38 @@ impl Stepper {
         Err((NewtonFailure::IterationCap(scaled), self.options.max_iterations))
     }
 
+    /// Factors `c_in M` plus the assembled Hessian (fixed DOFs held) into the
+    /// buffer not kept for a rollback; returns the negative pivots.
+    fn factor(&mut self, rod: &Rod, c_in: f64) -> Result<usize, NewtonFailure> {
+        for j in 0..rod.ndof() {
+            self.hess.add_diagonal(j, c_in * rod.mass[j]);
+            if rod.fixed[j] {
+                self.hess.constrain(j);
+            }
+        }
+        if self.saved.is_some_and(|(kept, _)| kept == self.active) {
+            self.active = 1 - self.active;
+        }
+        self.factored_c_in = None;
+        let inertia = self.ldlt[self.active]
+            .factor(&self.hess)
+            .map_err(|_| NewtonFailure::Singular)?;
+        self.factored_c_in = Some(c_in);
+        self.factorizations += 1;
+        Ok(inertia.negative)
+    }
+
+    /// F_ext of eq. (7c): gravity and the extra forces.
+    fn set_external(&mut self, rod: &Rod, env: &Environment, extra: Option<&[f64]>) {
+        self.ext.fill(0.0);
+        gravity::add(rod, &env.gravity, &mut self.ext);
+        if let Some(f) = extra {
+            for (e, x) in self.ext.iter_mut().zip(f) {
+                *e += x;
+            }
+        }
+    }
+
     /// Fills the residual r = grad Phi for every DOF (at a fixed DOF it is the
     /// reaction the constraint supplies) and returns Phi over the free DOFs.
     fn residual_and_potential(&mut self, rod: &Rod, h: f64, c_in: f64, elastic: f64) -> f64 {
@@ -393,6 +459,20 @@ impl Stepper {
         }
         phi
     }
+}
+
+/// Sets the rod's DOFs to the step's first guess `q_0 + h v_0` (the
+/// prescribed velocity at fixed DOFs).
+fn guess(rod: &mut Rod, h: f64) {
+    for j in 0..rod.ndof() {
+        let v = if rod.fixed[j] {
+            rod.prescribed_velocity[j]
+        } else {
+            rod.velocity[j]
+        };
+        rod.q[j] = rod.q_old[j] + h * v;
+    }
+    rod.update_geometry();
 }
 
 /// max over free DOFs of |r_j| / tol_j (forces against `f_tol`, moments against `m_tol`).

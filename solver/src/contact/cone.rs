@@ -122,6 +122,30 @@ pub fn solve_isotropic(u0: &Vector3<f64>, w: f64, mu: f64) -> Vector3<f64> {
     Vector3::new(rn, rt.x, rt.y)
 }
 
+/// Projection `P` of the local update `r <- P(r - rho u)` of Signorini and
+/// Coulomb's laws (eqs. 8-10), applied to `y = r - rho u`: `r_n = max(0, y_n)`,
+/// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`, or,
+/// with a (local, unit, tangent) `sliding` direction `t`, the point of the
+/// segment `{a t : |a| <= mu r_n}` closest to `y_t` (eq. 10's `D`; zero
+/// `sliding`: the disk).
+#[inline(always)]
+pub fn project_coulomb(y: &Vector3<f64>, mu: f64, sliding: &Vector3<f64>) -> Vector3<f64> {
+    if y.x <= 0.0 {
+        return Vector3::zeros();
+    }
+    if sliding.y != 0.0 || sliding.z != 0.0 {
+        let a = (y.y * sliding.y + y.z * sliding.z).clamp(-mu * y.x, mu * y.x);
+        return Vector3::new(y.x, a * sliding.y, a * sliding.z);
+    }
+    let (norm2, radius) = (y.y * y.y + y.z * y.z, mu * y.x);
+    if norm2 <= radius * radius {
+        *y
+    } else {
+        let k = radius / norm2.sqrt();
+        Vector3::new(y.x, k * y.y, k * y.z)
+    }
+}
+
 /// Natural-map residual of the Coulomb problem through De Saxce's modified
 /// velocity `u_hat = u + mu |u_t| n`:
 /// `|| r - P_K(r - rho u_hat) ||`, `rho > 0` (units of `r / u`).

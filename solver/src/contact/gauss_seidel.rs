@@ -12,7 +12,7 @@
 //! solved exactly by [`super::cone::solve_isotropic`]; the step towards that
 //! local solution is over-relaxed (`GaussSeidelOptions::relaxation`).
 
-use super::cone::{ContactFrame, natural_map_residual};
+use super::cone::{ContactFrame, natural_map_residual, project_coulomb};
 use super::segment::SegmentPair;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -237,10 +237,7 @@ impl Row {
 
     /// The local update `r <- P(r - rho u)` for the current local velocity
     /// `u` (`rho = (rho_n, rho_t, rho_t)`), with `P` the projection of
-    /// Coulomb's law: `r_n = max(0, y_n)`,
-    /// then `r_t` the point of the disk of radius `mu r_n` closest to `y_t`,
-    /// or, with a sliding direction `t`, the point of the segment
-    /// `{a t : |a| <= mu r_n}` closest to `y_t` (eq. 10's `D`).
+    /// Signorini and Coulomb's laws, [`project_coulomb`].
     /// A fixed point satisfies Signorini (eq. 8) and Coulomb (eq. 9) for any
     /// `rho_n, rho_t > 0`: `u_n = 0` where `r_n > 0` whatever `rho_n`, and a
     /// tangential force on the disk's rim points against `u_t` because
@@ -255,20 +252,7 @@ impl Row {
             self.r.y - rho_t * u.y,
             self.r.z - rho_t * u.z,
         );
-        if y.x <= 0.0 {
-            return Vector3::zeros();
-        }
-        if self.sliding.y != 0.0 || self.sliding.z != 0.0 {
-            let a = (y.y * self.sliding.y + y.z * self.sliding.z).clamp(-self.mu * y.x, self.mu * y.x);
-            return Vector3::new(y.x, a * self.sliding.y, a * self.sliding.z);
-        }
-        let (norm2, radius) = (y.y * y.y + y.z * y.z, self.mu * y.x);
-        if norm2 <= radius * radius {
-            y
-        } else {
-            let k = radius / norm2.sqrt();
-            Vector3::new(y.x, k * y.y, k * y.z)
-        }
+        project_coulomb(&y, self.mu, &self.sliding)
     }
 }
 

@@ -3,6 +3,7 @@
 mod builder;
 mod geometry;
 pub mod topology;
+mod twist;
 
 pub use builder::{
     BRAID_MARGIN, KnotError, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
@@ -12,3 +13,4 @@ pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
     knot_determinant,
 };
+pub use twist::{paper_twist, writhe};

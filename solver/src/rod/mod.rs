@@ -73,6 +73,13 @@ pub struct RodState {
     ref_twist: Vec<f64>,
 }
 
+impl RodState {
+    /// The DOFs q of the saved step.
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+}
+
 /// One naturally straight elastic rod with circular cross-section.
 #[derive(Clone, Debug)]
 pub struct Rod {
@@ -237,6 +244,18 @@ impl Rod {
     pub fn set_theta(&mut self, i: usize, theta: f64) {
         self.q[theta_dof(i)] = theta;
         self.q_old[theta_dof(i)] = theta;
+    }
+
+    /// Adds `turns` of twist spread evenly along the rod: edge `i`'s angle
+    /// grows by `2 pi turns i / (K - 2)`, so the last edge turns by `turns`
+    /// against the first.
+    pub fn add_twist(&mut self, turns: f64) {
+        let last = (self.edges() - 1) as f64;
+        for i in 0..self.edges() {
+            let theta = self.theta(i) + std::f64::consts::TAU * turns * i as f64 / last;
+            self.set_theta(i, theta);
+        }
+        self.update_geometry();
     }
 
     /// DOFs held by a clamp at `end`: positions of the two end nodes and the end

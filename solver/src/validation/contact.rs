@@ -1,7 +1,7 @@
 //! Contact cases (paper Sec. 3.2): crossing rods pressed together, a short rod
 //! on an inclined fixed rod (stick/slide), the capstan equation, and energy
 //! behaviour of frictionless bounces and of initially interpenetrating rods.
-use crate::contact::FrictionLaw;
+use crate::contact::{ContactSolve, FrictionLaw};
 use crate::external::Environment;
 use crate::material::Material;
 use crate::pipeline::{ContactOptions, World, WorldError};
@@ -97,7 +97,12 @@ pub fn crossing_rods_pressed() -> Result<(f64, f64, bool), WorldError> {
 /// without slipping at a = (2/3) g sin(alpha) while tan(alpha) <= 3 mu, and
 /// slides at g (sin(alpha) - mu cos(alpha)) beyond. At the centre lines the
 /// rod cannot roll: it sticks while tan(alpha) <= mu and slides beyond.
-pub fn inclined_rod(alpha: f64, mu: f64, rolling: bool) -> Result<(f64, f64), WorldError> {
+pub fn inclined_rod(
+    alpha: f64,
+    mu: f64,
+    rolling: bool,
+    solve: ContactSolve,
+) -> Result<(f64, f64), WorldError> {
     let g = 9.81;
     let h = 1e-3;
     let axis = Vector3::new(alpha.cos(), 0.0, alpha.sin());
@@ -121,6 +126,7 @@ pub fn inclined_rod(alpha: f64, mu: f64, rolling: bool) -> Result<(f64, f64), Wo
     let contact = ContactOptions {
         friction: mu,
         rolling,
+        solve,
         ..ContactOptions::default()
     };
     let mut world = World::new(vec![fixed, short], env, contact, NewtonOptions::default());
@@ -155,7 +161,12 @@ pub fn inclined_rod(alpha: f64, mu: f64, rolling: bool) -> Result<(f64, f64), Wo
 /// pulls it along its own axis, which rolling cannot relieve: it sticks
 /// while tan(alpha) <= mu and slides at g (sin(alpha) - mu cos(alpha)) beyond.
 /// Returns (measured acceleration along the rod, the closed form).
-pub fn rod_on_crossbars(alpha: f64, mu: f64, rolling: bool) -> Result<(f64, f64), WorldError> {
+pub fn rod_on_crossbars(
+    alpha: f64,
+    mu: f64,
+    rolling: bool,
+    solve: ContactSolve,
+) -> Result<(f64, f64), WorldError> {
     let g = 9.81;
     let h = 1e-3;
     let axis = Vector3::new(alpha.cos(), 0.0, alpha.sin());
@@ -178,6 +189,7 @@ pub fn rod_on_crossbars(alpha: f64, mu: f64, rolling: bool) -> Result<(f64, f64)
     let contact = ContactOptions {
         friction: mu,
         rolling,
+        solve,
         ..ContactOptions::default()
     };
     let mut world = World::new(
@@ -227,7 +239,7 @@ fn quadratic_coefficient(samples: &[(f64, f64)]) -> f64 {
 /// pulled at 1 cm/s at the other once the load has been ramped in. Bending is negligible: EI / (R^2 T) = 1.5 %,
 /// with R the wrap radius. Returns (mean pulling force / T during sliding,
 /// exp(mu phi)) under friction law `law`.
-pub fn capstan(mu: f64, phi: f64, law: FrictionLaw) -> Result<(f64, f64), WorldError> {
+pub fn capstan(mu: f64, phi: f64, law: FrictionLaw, solve: ContactSolve) -> Result<(f64, f64), WorldError> {
     let (r_fixed, r_rod) = (0.02, 0.3e-3);
     let radius = r_fixed + r_rod + 0.02 * r_rod;
     let pitch = 4.0 * r_rod;
@@ -272,6 +284,7 @@ pub fn capstan(mu: f64, phi: f64, law: FrictionLaw) -> Result<(f64, f64), WorldE
     let contact = ContactOptions {
         friction: mu,
         friction_law: law,
+        solve,
         ..ContactOptions::default()
     };
     let mut world = World::new(vec![rope, cylinder], env, contact, NewtonOptions::default());
@@ -297,6 +310,64 @@ pub fn capstan(mu: f64, phi: f64, law: FrictionLaw) -> Result<(f64, f64), WorldE
         }
     }
     Ok((sum / count as f64 / load, (mu * phi).exp()))
+}
+
+/// A sticking contact under a stiff load path: a rod (10 cm, 20 nodes,
+/// h = 1 mm, E = 10 MPa) clamped at x = 0 lies across a fixed bar at its
+/// middle, pressed onto it by a load N = 0.1 N on the two nodes of the
+/// touching segment; its free end is pulled along the rod by a force ramped
+/// from 0 to T = mu N / 2 over 0.2 s and then held for 0.2 s (mu = 0.5,
+/// damped, dt = 1 ms). Coulomb: T is inside the cone, the contact sticks and
+/// friction carries all of T, so the touching segment does not move along
+/// the rod and the clamped half stays unloaded. Returns (the segment's
+/// final displacement along the rod, the displacement if the contact slid
+/// freely and the clamped half carried T: T (L / 2) / EA).
+pub fn sticking_contact_creep(solve: ContactSolve) -> Result<(f64, f64), WorldError> {
+    let (h, length, k) = (1e-3, 0.1, 20);
+    let material = Material {
+        youngs_modulus: 1e7,
+        ..Material::default()
+    };
+    let mut rod = Rod::new(
+        &polyline(Vector3::zeros(), Vector3::new(length, 0.0, 0.0), k),
+        h,
+        material,
+    )
+    .expect("valid rod");
+    rod.clamp(End::Start);
+    // The bar crosses the middle of segment 9 (nodes 9 and 10), just touching.
+    let mid = 0.5 * (rod.node(9) + rod.node(10));
+    let bar = fixed_rod(
+        mid + Vector3::new(0.0, -0.02, -2.0 * h),
+        mid + Vector3::new(0.0, 0.02, -2.0 * h),
+        9,
+        h,
+    );
+    let (mu, normal) = (0.5, 0.1);
+    let pull = 0.5 * mu * normal;
+    let slide = pull * (length / 2.0) / (material.youngs_modulus * PI * h * h);
+    let env = Environment {
+        gravity: Vector3::zeros(),
+        damping: 50.0,
+    };
+    let contact = ContactOptions {
+        friction: mu,
+        solve,
+        ..ContactOptions::default()
+    };
+    let mut world = World::new(vec![rod, bar], env, contact, NewtonOptions::default());
+    for node in [9, 10] {
+        world.load_mut(0)[node_dof(node) + 2] = -0.5 * normal;
+    }
+    let start = mid.x;
+    let (dt, ramp, hold) = (1e-3, 200, 200);
+    for step in 0..ramp + hold {
+        let scale = ((step + 1) as f64 / ramp as f64).min(1.0);
+        world.load_mut(0)[node_dof(k - 1)] = scale * pull;
+        world.step(dt)?;
+    }
+    let r = &world.rods[0];
+    Ok((0.5 * (r.node(9) + r.node(10)).x - start, slide))
 }
 
 /// A free rod thrown at a fixed rod with `mu = 0` and no damping: returns

@@ -96,6 +96,10 @@ pub fn contact_cases() -> Vec<Case> {
             run: interpenetration_rows,
         },
         Case {
+            name: "sticking",
+            run: sticking_rows,
+        },
+        Case {
             name: "capstan",
             run: capstan_rows,
         },
@@ -142,18 +146,23 @@ fn crossing_rows() -> Vec<CaseResult> {
 
 fn inclined_rows() -> Vec<CaseResult> {
     let mut rows = Vec::new();
-    for (deg, mu, rolling) in [
-        (10.0f64, 0.3, true),
-        (30.0, 0.3, true),
-        (20.0, 0.05, true),
-        (10.0, 0.3, false),
-        (20.0, 0.1, false),
+    use crate::contact::ContactSolve::{Explicit, Implicit};
+    for (deg, mu, rolling, solve) in [
+        (10.0f64, 0.3, true, Explicit),
+        (30.0, 0.3, true, Explicit),
+        (20.0, 0.05, true, Explicit),
+        (10.0, 0.3, false, Explicit),
+        (20.0, 0.1, false, Explicit),
+        (10.0, 0.3, true, Implicit),
+        (20.0, 0.05, true, Implicit),
+        (10.0, 0.3, false, Implicit),
     ] {
         let name = format!(
-            "inclined_{deg}deg_mu{mu}_{}",
-            if rolling { "rolling" } else { "centre_line" }
+            "inclined_{deg}deg_mu{mu}_{}{}",
+            if rolling { "rolling" } else { "centre_line" },
+            solve_suffix(solve)
         );
-        match contact::inclined_rod(deg.to_radians(), mu, rolling) {
+        match contact::inclined_rod(deg.to_radians(), mu, rolling, solve) {
             Ok((a, 0.0)) => rows.push(CaseResult::with_error(
                 &name,
                 "sticks: |acceleration| / g (tan alpha < mu)",
@@ -176,12 +185,19 @@ fn inclined_rows() -> Vec<CaseResult> {
             Err(e) => rows.push(CaseResult::failed(&name, "acceleration", e)),
         }
     }
-    for (deg, mu, rolling) in [(10.0f64, 0.3, true), (30.0, 0.3, true), (30.0, 0.3, false)] {
+    for (deg, mu, rolling, solve) in [
+        (10.0f64, 0.3, true, Explicit),
+        (30.0, 0.3, true, Explicit),
+        (30.0, 0.3, false, Explicit),
+        (10.0, 0.3, true, Implicit),
+        (30.0, 0.3, true, Implicit),
+    ] {
         let name = format!(
-            "crossbar_{deg}deg_mu{mu}_{}",
-            if rolling { "rolling" } else { "centre_line" }
+            "crossbar_{deg}deg_mu{mu}_{}{}",
+            if rolling { "rolling" } else { "centre_line" },
+            solve_suffix(solve)
         );
-        match contact::rod_on_crossbars(deg.to_radians(), mu, rolling) {
+        match contact::rod_on_crossbars(deg.to_radians(), mu, rolling, solve) {
             Ok((a, 0.0)) => rows.push(CaseResult::with_error(
                 &name,
                 "sticks along its axis: |acceleration| / g (tan alpha < mu)",
@@ -243,10 +259,18 @@ fn interpenetration_rows() -> Vec<CaseResult> {
 
 fn capstan_rows() -> Vec<CaseResult> {
     let mut rows = Vec::new();
-    for (mu, turns) in [(0.1, 0.5), (0.3, 0.5), (0.1, 1.0), (0.3, 1.0)] {
+    use crate::contact::ContactSolve::{Explicit, Implicit};
+    for (mu, turns, solve) in [
+        (0.1, 0.5, Explicit),
+        (0.3, 0.5, Explicit),
+        (0.1, 1.0, Explicit),
+        (0.3, 1.0, Explicit),
+        (0.1, 0.5, Implicit),
+        (0.3, 1.0, Implicit),
+    ] {
         let phi = turns * std::f64::consts::TAU;
-        let name = format!("capstan_mu{mu}_phi{}pi", 2.0 * turns);
-        match contact::capstan(mu, phi, crate::contact::FrictionLaw::Isotropic) {
+        let name = format!("capstan_mu{mu}_phi{}pi{}", 2.0 * turns, solve_suffix(solve));
+        match contact::capstan(mu, phi, crate::contact::FrictionLaw::Isotropic, solve) {
             Ok((ratio, expected)) => rows.push(CaseResult::relative(
                 &name,
                 "tension ratio at slip exp(mu phi)",
@@ -258,6 +282,31 @@ fn capstan_rows() -> Vec<CaseResult> {
         }
     }
     rows
+}
+
+/// Row-name suffix of a contact solve: none for the default explicit one.
+fn solve_suffix(solve: crate::contact::ContactSolve) -> &'static str {
+    match solve {
+        crate::contact::ContactSolve::Explicit => "",
+        crate::contact::ContactSolve::Implicit => "_implicit",
+    }
+}
+
+/// The sticking contact under the implicit solve. The explicit solve (the
+/// paper's) lets it slide (`solver/tests/contact_validation.rs`).
+fn sticking_rows() -> Vec<CaseResult> {
+    let name = "sticking_no_creep_implicit";
+    match contact::sticking_contact_creep(crate::contact::ContactSolve::Implicit) {
+        Ok((slip, slide)) => vec![CaseResult::with_error(
+            name,
+            &format!("sticking contact's slip along the rod / free-sliding stretch ({slide:.2e} m)"),
+            0.0,
+            slip,
+            (slip / slide).abs(),
+            0.05,
+        )],
+        Err(e) => vec![CaseResult::failed(name, "slip", e)],
+    }
 }
 
 /// The rod-solver cases (no contact), cheapest first.

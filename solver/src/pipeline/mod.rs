@@ -12,10 +12,15 @@
 //!
 //! Contact forces couple rods only through step 3, so each rod's Newton system
 //! stays banded and a step costs O(K) plus O(contacts * sweeps).
+//!
+//! With [`ContactSolve::Implicit`] steps 2-3 see the implicit step instead
+//! ([`implicit`]): the free velocities come from a contact-free implicit step
+//! and the Delassus operator from its Newton matrix.
+mod implicit;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
 use crate::contact::segment::closest_points;
-use crate::contact::{FrictionLaw, narrow_phase};
+use crate::contact::{Candidates, ContactSolve, FrictionLaw, narrow_phase};
 use crate::counters::Counters;
 use crate::energies::{self, Terms};
 use crate::external::{Environment, gravity};
@@ -48,6 +53,10 @@ pub struct ContactOptions {
     pub penetration_recovery: f64,
     /// The Gauss-Seidel stopping rule.
     pub solver: GaussSeidelOptions,
+    /// Which free velocities and Delassus operator the contact solve uses.
+    pub solve: ContactSolve,
+    /// Which segment pairs get a contact force.
+    pub candidates: Candidates,
 }
 
 impl Default for ContactOptions {
@@ -60,6 +69,8 @@ impl Default for ContactOptions {
             margin: 0.25,
             penetration_recovery: 1.0,
             solver: GaussSeidelOptions::default(),
+            solve: ContactSolve::default(),
+            candidates: Candidates::default(),
         }
     }
 }
@@ -111,6 +122,9 @@ pub struct World {
     warm: Vec<Vector3<f64>>,
     inv_mass: Vec<f64>,
     v_free: Vec<Vector3<f64>>,
+    /// Contact forces (on the first rod of each pair) of the last solve.
+    forces: Vec<Vector3<f64>>,
+    implicit: implicit::Buffers,
     saved: Saved,
 }
 
@@ -121,6 +135,8 @@ struct Body {
     /// Global ids of its first node and first edge (twist DOF, for rolling).
     first_node: usize,
     first_edge: usize,
+    /// Offset of its DOFs in the world's concatenated DOF vector.
+    first_dof: usize,
     /// Constant external load (one entry per DOF), added to F^ext.
     load: Vec<f64>,
     /// F^ext of the current step: load, gravity and contact forces.
@@ -219,7 +235,7 @@ const SKIN: f64 = 0.25;
 impl World {
     /// A world of `rods` under `env`, each stepped with `newton`.
     pub fn new(rods: Vec<Rod>, env: Environment, contact: ContactOptions, newton: NewtonOptions) -> Self {
-        let (mut total, mut total_edges) = (0, 0);
+        let (mut total, mut total_edges, mut total_dofs) = (0, 0, 0);
         let bodies = rods
             .iter()
             .map(|r| {
@@ -227,12 +243,14 @@ impl World {
                     stepper: Stepper::new(r, newton),
                     first_node: total,
                     first_edge: total_edges,
+                    first_dof: total_dofs,
                     load: vec![0.0; r.ndof()],
                     force: vec![0.0; r.ndof()],
                     grad: vec![0.0; r.ndof()],
                 };
                 total += r.nodes();
                 total_edges += r.edges();
+                total_dofs += r.ndof();
                 body
             })
             .collect();
@@ -243,6 +261,7 @@ impl World {
                 neighbour_gap(2.0 * r.section.radius, shortest)
             })
             .collect();
+        let implicit = implicit::Buffers::new(&rods);
         Self {
             rods,
             bodies,
@@ -261,6 +280,8 @@ impl World {
             warm: Vec::new(),
             inv_mass: vec![0.0; total],
             v_free: vec![Vector3::zeros(); total],
+            forces: Vec::new(),
+            implicit,
             saved: Saved::default(),
         }
     }
@@ -307,7 +328,7 @@ impl World {
 
     /// Contact forces (on the first rod of each pair) of the last step.
     pub fn contact_forces(&self) -> &[Vector3<f64>] {
-        self.gauss_seidel.contact_forces()
+        &self.forces
     }
 
     /// Advances every rod by `dt`.
@@ -321,12 +342,22 @@ impl World {
             let mut detection = self.counters.detection;
             Counters::time(&mut detection, || self.detect(dt))?;
             self.counters.detection = detection;
+            self.forces.clear();
+            let mut solve = self.counters.contact_solve;
+            let predict = self.contact.candidates == Candidates::Predicted
+                || self.contact.solve == ContactSolve::Implicit;
+            if predict && !self.contacts.is_empty() {
+                Counters::time(&mut solve, || self.predict(dt))?;
+            }
             report.contacts = self.contacts.len();
             if !self.contacts.is_empty() {
-                let mut solve = self.counters.contact_solve;
-                Counters::time(&mut solve, || self.solve_contacts(dt, &mut report));
-                self.counters.contact_solve = solve;
+                let implicit = self.contact.solve == ContactSolve::Implicit;
+                if !(implicit && Counters::time(&mut solve, || self.solve_contacts_implicit(dt, &mut report)))
+                {
+                    Counters::time(&mut solve, || self.solve_contacts(dt, &mut report));
+                }
             }
+            self.counters.contact_solve = solve;
         }
         let mut dynamics = self.counters.dynamics;
         let result = Counters::time(&mut dynamics, || self.step_rods(dt, &mut report));
@@ -338,6 +369,7 @@ impl World {
 
     fn detect(&mut self, dt: f64) -> Result<(), WorldError> {
         self.segments.clear();
+        self.implicit.dropped.clear();
         let mut fastest: f64 = 0.0;
         let mut largest_radius: f64 = 0.0;
         for (b, rod) in self.rods.iter().enumerate() {
@@ -363,7 +395,9 @@ impl World {
         self.contacts.clear();
         self.pair_ids.clear();
         for (k, p) in pairs.iter().enumerate() {
-            if narrow_phase::redundant(pairs, k, &self.segments) {
+            if self.contact.candidates == Candidates::Detected
+                && narrow_phase::redundant(pairs, k, &self.segments)
+            {
                 continue;
             }
             let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
@@ -485,8 +519,8 @@ impl World {
                 }
             }
         }
-        self.history
-            .push(&self.pair_ids, self.gauss_seidel.contact_forces(), dt);
+        self.forces.extend_from_slice(self.gauss_seidel.contact_forces());
+        self.history.push(&self.pair_ids, &self.forces, dt);
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
@@ -507,7 +541,7 @@ impl World {
     /// Largest penetration over the detected pairs at the current positions.
     fn max_penetration(&self) -> f64 {
         let mut worst: f64 = 0.0;
-        for &(i, j) in &self.pair_ids {
+        for &(i, j) in self.pair_ids.iter().chain(&self.implicit.dropped) {
             let (sa, sb) = (&self.segments[i], &self.segments[j]);
             let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
             let cp = closest_points(

@@ -2,9 +2,9 @@
 //!
 //! - [`key`]: a case's identity, the blake3 hash of its canonical parameters and
 //!   the solver version (dedup and result cache).
-//! - [`store`]: the queue is the `cases` table, behind the [`store::Store`] trait;
-//!   [`store::SqliteStore`] is the SQLite implementation (WAL, IMMEDIATE
-//!   transactions, one-statement claims, leases with fencing).
+//! - [`store`]: the queue is the `cases` table, behind the [`store::Store`] trait,
+//!   implemented once ([`store::SqlStore`]) for SQLite and PostgreSQL
+//!   (one-statement claims, leases with fencing).
 //! - [`pool`]: a worker pool that claims cases, runs the real solver on a rayon
 //!   pool off the async runtime, heartbeats its leases and stores the results.
 //! - [`metrics`]: in-process counters of a pool, rendered as Prometheus text.

@@ -55,10 +55,10 @@ impl WorkerMetrics {
         self.inner.lock().expect("metrics lock").count
     }
 
-    /// Prometheus text exposition of these counters.
-    pub fn render(&self, out: &mut String) {
+    /// The counters: name, help text, value.
+    fn counters(&self) -> [(&'static str, &'static str, u64); 7] {
         let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
-        let counters = [
+        [
             (
                 "knotsweep_claims_total",
                 "Cases claimed by this process's workers.",
@@ -94,14 +94,18 @@ impl WorkerMetrics {
                 "Store errors seen by the workers (retried).",
                 get(&self.store_errors),
             ),
-        ];
-        for (name, help, value) in counters {
+        ]
+    }
+
+    /// Prometheus text exposition of these counters.
+    pub fn render(&self, out: &mut String) {
+        for (name, help, value) in self.counters() {
             let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} counter\n{name} {value}");
         }
         let _ = writeln!(
             out,
             "# HELP knotsweep_running_cases Cases computing in this process.\n# TYPE knotsweep_running_cases gauge\nknotsweep_running_cases {}",
-            get(&self.running)
+            self.running.load(Ordering::Relaxed)
         );
         let inner = self.inner.lock().expect("metrics lock");
         let _ = writeln!(

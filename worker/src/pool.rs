@@ -13,7 +13,8 @@
 //! - on shutdown the slots stop claiming, release their leases at once (the
 //!   cases are queued again, the attempt not counted) and stop their solvers.
 use crate::metrics::WorkerMetrics;
-use crate::store::{Claim, FailOutcome, Heartbeat, Store, StoreError, now_ms};
+use crate::store::{Claim, FailOutcome, Heartbeat, Lease, Store, StoreError, now_ms};
+use solver::case::CaseParams;
 use solver::protocol::{self, CaseReport, Progress, Status};
 use std::panic::AssertUnwindSafe;
 use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering};
@@ -151,7 +152,7 @@ impl WorkerPool {
         });
         let (shutdown, rx) = watch::channel(false);
         let tasks = (0..config.workers)
-            .map(|slot| tokio::spawn(supervise(ctx.clone(), slot, rx.clone())))
+            .map(|slot| tokio::spawn(run_slot(ctx.clone(), slot, rx.clone())))
             .collect();
         tracing::info!(workers = config.workers, name = %config.name, lease_s = config.lease.as_secs_f64(), "worker pool started");
         Self {
@@ -184,8 +185,8 @@ impl WorkerPool {
     }
 }
 
-/// Restarts a slot that panicked (outside the solver, which is caught).
-async fn supervise(ctx: Arc<Ctx>, slot: usize, shutdown: watch::Receiver<bool>) {
+/// Runs a slot, restarting it if it panics (outside the solver, which is caught).
+async fn run_slot(ctx: Arc<Ctx>, slot: usize, shutdown: watch::Receiver<bool>) {
     loop {
         let task = tokio::spawn(slot_loop(ctx.clone(), slot, shutdown.clone()));
         match task.await {
@@ -261,154 +262,229 @@ async fn slot_loop(ctx: Arc<Ctx>, slot: usize, mut shutdown: watch::Receiver<boo
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Stop {
-    Cancel,
-    Lost,
-    Shutdown,
+/// Runs a claimed case to its end and records how it ended.
+async fn run_claim(ctx: &Ctx, slot: usize, claim: Claim, shutdown: &mut watch::Receiver<bool>) {
+    let claimed_at = Instant::now();
+    let params = &claim.params;
+    tracing::info!(n = params.n, h = params.h, mu = params.mu, "case claimed");
+    let mut run = SolverRun::spawn(&ctx.rayon, claim.params);
+    ctx.metrics.running.fetch_add(1, Ordering::Relaxed);
+    let outcome = supervise(ctx, slot, &claim.lease, &mut run, shutdown).await;
+    ctx.metrics.running.fetch_sub(1, Ordering::Relaxed);
+    record(ctx, &claim.lease, outcome, claimed_at).await;
 }
 
-type SolverOutcome = Result<CaseReport, String>;
+/// A case computing on a rayon thread.
+struct SolverRun {
+    /// Asks the solver to stop at its next progress report.
+    stop: Arc<AtomicBool>,
+    /// Its latest progress report.
+    latest: Arc<Mutex<Option<Progress>>>,
+    /// Its report, or why it has none (a panic).
+    report: oneshot::Receiver<Result<CaseReport, String>>,
+}
 
-async fn run_claim(ctx: &Ctx, slot: usize, claim: Claim, shutdown: &mut watch::Receiver<bool>) {
-    let lease = claim.lease.clone();
-    let claimed_at = Instant::now();
-    tracing::info!(
-        n = claim.params.n,
-        h = claim.params.h,
-        mu = claim.params.mu,
-        "case claimed"
-    );
-    let stop = Arc::new(AtomicBool::new(false));
-    let latest: Arc<Mutex<Option<Progress>>> = Arc::new(Mutex::new(None));
-    let (tx, mut rx) = oneshot::channel::<SolverOutcome>();
-    {
-        let (stop, latest, params) = (stop.clone(), latest.clone(), claim.params.clone());
-        ctx.rayon.spawn(move || {
+impl SolverRun {
+    fn spawn(rayon: &rayon::ThreadPool, params: CaseParams) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let latest = Arc::new(Mutex::new(None));
+        let (tx, report) = oneshot::channel();
+        let (stopped, progress) = (stop.clone(), latest.clone());
+        rayon.spawn(move || {
             let run = std::panic::catch_unwind(AssertUnwindSafe(|| {
                 protocol::run(&params, &mut |p| {
-                    if let Ok(mut l) = latest.lock() {
+                    if let Ok(mut l) = progress.lock() {
                         *l = Some(*p);
                     }
-                    !stop.load(Ordering::Relaxed)
+                    !stopped.load(Ordering::Relaxed)
                 })
             }));
             let _ = tx.send(run.map_err(|payload| panic_message(payload.as_ref())));
         });
+        Self { stop, latest, report }
     }
-    ctx.metrics.running.fetch_add(1, Ordering::Relaxed);
-    let heartbeat = ctx.config.heartbeat.max(Duration::from_millis(10));
-    let mut ticker = tokio::time::interval_at(tokio::time::Instant::now() + heartbeat, heartbeat);
+
+    fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+
+    fn progress(&self) -> Option<Progress> {
+        self.latest.lock().ok().and_then(|l| *l)
+    }
+
+    /// The solver's report (cancel-safe: polls the same channel every time).
+    async fn finished(&mut self) -> Result<CaseReport, String> {
+        (&mut self.report)
+            .await
+            .unwrap_or_else(|_| Err("the solver thread ended without a result".to_string()))
+    }
+}
+
+/// What the heartbeats of a run have found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LeaseState {
+    Held,
+    /// Every sweep that wants the case was cancelled; the solver is stopping.
+    Cancelling,
+    /// Another worker holds the case now; the solver is stopping.
+    Lost,
+}
+
+/// How a run ended.
+enum Outcome {
+    /// The solver returned (a result, a solver failure or a cancelled run).
+    Report(Box<CaseReport>),
+    /// The solver panicked.
+    Crashed(String),
+    /// The lease was lost: the run is discarded.
+    LeaseLost,
+    /// The pool is shutting down: the lease was given back.
+    ShutDown,
+}
+
+/// Follows a run to its end: heartbeats (storing progress, stopping the
+/// solver when cancelled or when the lease is lost) and shutdown.
+async fn supervise(
+    ctx: &Ctx,
+    slot: usize,
+    lease: &Lease,
+    run: &mut SolverRun,
+    shutdown: &mut watch::Receiver<bool>,
+) -> Outcome {
+    let period = ctx.config.heartbeat.max(Duration::from_millis(10));
+    let mut ticker = tokio::time::interval_at(tokio::time::Instant::now() + period, period);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    let mut why: Option<Stop> = None;
-    let outcome: SolverOutcome = loop {
+    let mut state = LeaseState::Held;
+    loop {
         tokio::select! {
-            r = &mut rx => break r.unwrap_or_else(|_| Err("the solver thread ended without a result".to_string())),
+            report = run.finished() => {
+                return match (state, report) {
+                    (LeaseState::Lost, _) => Outcome::LeaseLost,
+                    (_, Ok(report)) => Outcome::Report(Box::new(report)),
+                    (_, Err(panic)) => Outcome::Crashed(panic),
+                };
+            }
             _ = ticker.tick() => {
                 ctx.last_poll[slot].store(now_ms(), Ordering::Relaxed);
-                let progress = latest.lock().ok().and_then(|l| *l);
-                match ctx.store.heartbeat(&lease, progress.as_ref(), ctx.config.lease).await {
-                    Ok(Heartbeat::Held { cancel: true }) if why.is_none() => {
-                        tracing::info!("cancel requested: stopping the solver");
-                        stop.store(true, Ordering::Relaxed);
-                        why = Some(Stop::Cancel);
-                    }
-                    Ok(Heartbeat::Held { .. }) => {}
-                    Ok(Heartbeat::Lost) => {
-                        if why != Some(Stop::Lost) {
-                            tracing::warn!("lease lost to another worker: stopping the solver");
-                        }
-                        stop.store(true, Ordering::Relaxed);
-                        why = Some(Stop::Lost);
-                    }
-                    Err(e) => {
-                        WorkerMetrics::inc(&ctx.metrics.store_errors);
-                        tracing::warn!(error = %e, "heartbeat failed; will retry");
-                    }
-                }
+                state = heartbeat(ctx, lease, run, state).await;
             }
-            _ = shutdown.changed(), if why != Some(Stop::Shutdown) && why != Some(Stop::Lost) => {
-                stop.store(true, Ordering::Relaxed);
-                why = Some(Stop::Shutdown);
-                match ctx.store.release(&lease).await {
-                    Ok(true) => {
-                        WorkerMetrics::inc(&ctx.metrics.releases);
-                        tracing::info!("shutting down: lease released");
-                    }
-                    Ok(false) => tracing::info!("shutting down: the lease was no longer ours"),
-                    Err(e) => tracing::warn!(error = %e, "shutting down: releasing the lease failed; it will expire"),
-                }
-                // Give the solver a moment to notice the stop flag, then leave.
-                match tokio::time::timeout(ctx.config.shutdown_grace, &mut rx).await {
-                    Ok(r) => break r.unwrap_or_else(|_| Err("the solver thread ended without a result".to_string())),
-                    Err(_) => break Err("shutdown".to_string()),
-                }
+            _ = shutdown.changed(), if state != LeaseState::Lost => {
+                return shut_down(ctx, lease, run).await;
             }
         }
-    };
-    ctx.metrics.running.fetch_sub(1, Ordering::Relaxed);
-    match (why, outcome) {
-        (Some(Stop::Shutdown), _) => {}
-        (Some(Stop::Lost), _) => {
+    }
+}
+
+/// Extends the lease and stores progress; stops the solver at the first
+/// cancel request or when the lease is lost.
+async fn heartbeat(ctx: &Ctx, lease: &Lease, run: &SolverRun, state: LeaseState) -> LeaseState {
+    let progress = run.progress();
+    match ctx
+        .store
+        .heartbeat(lease, progress.as_ref(), ctx.config.lease)
+        .await
+    {
+        Ok(Heartbeat::Held { cancel: true }) if state == LeaseState::Held => {
+            tracing::info!("cancel requested: stopping the solver");
+            run.stop();
+            LeaseState::Cancelling
+        }
+        Ok(Heartbeat::Held { .. }) => state,
+        Ok(Heartbeat::Lost) => {
+            if state != LeaseState::Lost {
+                tracing::warn!("lease lost to another worker: stopping the solver");
+            }
+            run.stop();
+            LeaseState::Lost
+        }
+        Err(e) => {
+            WorkerMetrics::inc(&ctx.metrics.store_errors);
+            tracing::warn!(error = %e, "heartbeat failed; will retry");
+            state
+        }
+    }
+}
+
+/// Stops the solver, gives the lease back at once and leaves once the solver
+/// has noticed (or after `shutdown_grace`).
+async fn shut_down(ctx: &Ctx, lease: &Lease, run: &mut SolverRun) -> Outcome {
+    run.stop();
+    match ctx.store.release(lease).await {
+        Ok(true) => {
+            WorkerMetrics::inc(&ctx.metrics.releases);
+            tracing::info!("shutting down: lease released");
+        }
+        Ok(false) => tracing::info!("shutting down: the lease was no longer ours"),
+        Err(e) => tracing::warn!(error = %e, "shutting down: releasing the lease failed; it will expire"),
+    }
+    let _ = tokio::time::timeout(ctx.config.shutdown_grace, run.finished()).await;
+    Outcome::ShutDown
+}
+
+/// Stores what a run ended with, with its metrics.
+async fn record(ctx: &Ctx, lease: &Lease, outcome: Outcome, claimed_at: Instant) {
+    match outcome {
+        Outcome::ShutDown => {}
+        Outcome::LeaseLost => {
             WorkerMetrics::inc(&ctx.metrics.lost_leases);
-            let _ = ctx
-                .store
-                .append_log(
-                    lease.case_id,
-                    "warn",
-                    &format!("{} lost its lease; its run was discarded", lease.owner),
-                )
-                .await;
+            let message = format!("{} lost its lease; its run was discarded", lease.owner);
+            let _ = ctx.store.append_log(lease.case_id, "warn", &message).await;
         }
-        (_, Err(panic)) => {
-            tracing::error!(reason = %panic, "solver panicked");
-            let reason = format!("solver panicked: {panic}");
-            match with_retries(|| ctx.store.fail_attempt(&lease, &reason)).await {
-                Ok(FailOutcome::Retry { after }) => {
-                    WorkerMetrics::inc(&ctx.metrics.retries);
-                    tracing::warn!(retry_in_s = after.as_secs_f64(), "attempt failed; queued again");
-                }
-                Ok(FailOutcome::Failed) => {
-                    WorkerMetrics::inc(&ctx.metrics.failures);
-                    tracing::error!("out of attempts: case failed");
-                }
-                Ok(FailOutcome::Lost) => WorkerMetrics::inc(&ctx.metrics.lost_leases),
-                Err(e) => tracing::error!(error = %e, "recording the failure failed; the lease will expire"),
-            }
-        }
-        (_, Ok(report)) if report.status == Status::Cancelled => {
+        Outcome::Crashed(panic) => record_crash(ctx, lease, &panic).await,
+        Outcome::Report(report) if report.status == Status::Cancelled => {
             WorkerMetrics::inc(&ctx.metrics.cancellations);
-            match with_retries(|| ctx.store.finish_cancelled(&lease)).await {
+            match with_retries(|| ctx.store.finish_cancelled(lease)).await {
                 Ok(_) => tracing::info!("case cancelled"),
                 Err(e) => {
                     tracing::error!(error = %e, "recording the cancellation failed; the lease will expire")
                 }
             }
         }
-        (_, Ok(report)) => match with_retries(|| ctx.store.complete(&lease, &report)).await {
-            Ok(true) => {
-                let outcome = serde_json::to_value(report.status).ok();
-                let outcome = outcome.as_ref().and_then(|v| v.as_str()).unwrap_or("unknown");
-                ctx.metrics.record_completion(
-                    outcome,
-                    report.stats.wall_time,
-                    claimed_at.elapsed().as_secs_f64(),
-                );
-                tracing::info!(
-                    outcome,
-                    wall_s = report.stats.wall_time,
-                    inversion = report.inversion.map(|i| i.l_k_bar),
-                    "result stored"
-                );
-            }
-            Ok(false) => {
-                WorkerMetrics::inc(&ctx.metrics.lost_leases);
-                tracing::warn!("lease lost before the result was stored; result discarded");
-            }
-            Err(e) => {
-                tracing::error!(error = %e, "storing the result failed; the lease will expire and the case rerun")
-            }
-        },
+        Outcome::Report(report) => record_result(ctx, lease, &report, claimed_at).await,
+    }
+}
+
+/// A solver panic is a failed attempt: retried with backoff, then `failed`.
+async fn record_crash(ctx: &Ctx, lease: &Lease, panic: &str) {
+    tracing::error!(reason = %panic, "solver panicked");
+    let reason = format!("solver panicked: {panic}");
+    match with_retries(|| ctx.store.fail_attempt(lease, &reason)).await {
+        Ok(FailOutcome::Retry { after }) => {
+            WorkerMetrics::inc(&ctx.metrics.retries);
+            tracing::warn!(retry_in_s = after.as_secs_f64(), "attempt failed; queued again");
+        }
+        Ok(FailOutcome::Failed) => {
+            WorkerMetrics::inc(&ctx.metrics.failures);
+            tracing::error!("out of attempts: case failed");
+        }
+        Ok(FailOutcome::Lost) => WorkerMetrics::inc(&ctx.metrics.lost_leases),
+        Err(e) => tracing::error!(error = %e, "recording the failure failed; the lease will expire"),
+    }
+}
+
+/// Stores the solver's report as the case's result, if the lease is still ours.
+async fn record_result(ctx: &Ctx, lease: &Lease, report: &CaseReport, claimed_at: Instant) {
+    match with_retries(|| ctx.store.complete(lease, report)).await {
+        Ok(true) => {
+            let outcome = serde_json::to_value(report.status).ok();
+            let outcome = outcome.as_ref().and_then(|v| v.as_str()).unwrap_or("unknown");
+            let total = claimed_at.elapsed().as_secs_f64();
+            ctx.metrics
+                .record_completion(outcome, report.stats.wall_time, total);
+            tracing::info!(
+                outcome,
+                wall_s = report.stats.wall_time,
+                inversion = report.inversion.map(|i| i.l_k_bar),
+                "result stored"
+            );
+        }
+        Ok(false) => {
+            WorkerMetrics::inc(&ctx.metrics.lost_leases);
+            tracing::warn!("lease lost before the result was stored; result discarded");
+        }
+        Err(e) => {
+            tracing::error!(error = %e, "storing the result failed; the lease will expire and the case rerun")
+        }
     }
 }
 

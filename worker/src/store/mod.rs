@@ -1,10 +1,11 @@
 //! The queue is the `cases` table; this trait is everything the server and the
-//! workers do with it. [`sqlite::SqliteStore`] implements it on one SQLite file
-//! (the embedded default), [`postgres::PgStore`] on a PostgreSQL server that
-//! workers on many hosts share (`FOR UPDATE SKIP LOCKED` claims, wake-ups by
-//! `LISTEN/NOTIFY`). Both run the same schema (`migrations/sqlite`,
-//! `migrations/postgres`) and decode rows with the same code (`rows`);
-//! [`open_store`] picks one from a URL.
+//! workers do with it. [`SqlStore`] implements it once, over sqlx, for both
+//! backends: [`sqlite::SqliteStore`] on one SQLite file (the embedded
+//! default), [`postgres::PgStore`] on a PostgreSQL server that workers on many
+//! hosts share (`FOR UPDATE SKIP LOCKED` claims, wake-ups by `LISTEN/NOTIFY`).
+//! Both run the same schema (`migrations/sqlite`, `migrations/postgres`) and
+//! the same statements (`sql/`), decode rows with the same code (`rows`), and
+//! differ only where [`Backend`] says; [`open_store`] picks one from a URL.
 //!
 //! Queue invariants, whatever the backend:
 //! - a case is claimed by one statement that sets the lease (owner, expiry)
@@ -16,10 +17,9 @@
 //! - an expired lease returns the case to the queue (with backoff) or, after
 //!   `max_attempts` claims, marks it `failed` with the reason;
 //! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
-#[macro_use]
-mod backend_impl;
 pub mod postgres;
 mod rows;
+mod sql;
 pub mod sqlite;
 #[cfg(test)]
 mod testing;
@@ -31,6 +31,8 @@ use solver::measurements::Inversion;
 use solver::protocol::{CaseReport, Progress};
 use std::ops::RangeInclusive;
 use std::time::Duration;
+
+pub use sql::{Backend, SqlStore};
 
 /// Errors of the store.
 #[derive(Debug, thiserror::Error)]
@@ -493,15 +495,16 @@ fn ms(d: Duration) -> i64 {
 mod tests {
     use super::*;
 
-    /// Fig. 11's sweep: the cases above `ADAPTIVE_MAX_MU` run the whole pull
-    /// slowly and join the queue first, the rest keep their grid order, and
-    /// every case keeps its grid position.
+    /// Fig. 11's sweep under the adaptive protocol: the cases above
+    /// `ADAPTIVE_MAX_MU` run the whole pull slowly and join the queue first,
+    /// the rest keep their grid order, and every case keeps its grid position.
     #[test]
     fn queue_order_puts_slow_cases_first() {
         let cases = [0.1, 0.4, 0.2, 0.6]
             .map(|mu| {
                 NewCase::new(CaseParams {
                     mu,
+                    protocol: solver::protocol::Protocol::Adaptive,
                     ..CaseParams::default()
                 })
             })

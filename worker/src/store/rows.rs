@@ -1,14 +1,34 @@
-//! Decoding stored rows into records, once for every backend: each backend's
-//! row type reads the five column types the schema uses.
+//! Decoding stored rows into records, once for every backend: the schema has
+//! three column types (integer, real, text), read through [`Columns`].
 use super::*;
+use sqlx::Row;
+use sqlx::any::AnyRow;
 
-/// Typed column access of a backend's row.
+/// Typed column access of a row (`StoreError`s, not sqlx errors).
 pub(crate) trait Columns {
     fn text(&self, column: &str) -> StoreResult<String>;
     fn text_or_null(&self, column: &str) -> StoreResult<Option<String>>;
     fn int(&self, column: &str) -> StoreResult<i64>;
     fn int_or_null(&self, column: &str) -> StoreResult<Option<i64>>;
     fn real(&self, column: &str) -> StoreResult<f64>;
+}
+
+impl Columns for AnyRow {
+    fn text(&self, column: &str) -> StoreResult<String> {
+        Ok(self.try_get(column)?)
+    }
+    fn text_or_null(&self, column: &str) -> StoreResult<Option<String>> {
+        Ok(self.try_get(column)?)
+    }
+    fn int(&self, column: &str) -> StoreResult<i64> {
+        Ok(self.try_get(column)?)
+    }
+    fn int_or_null(&self, column: &str) -> StoreResult<Option<i64>> {
+        Ok(self.try_get(column)?)
+    }
+    fn real(&self, column: &str) -> StoreResult<f64> {
+        Ok(self.try_get(column)?)
+    }
 }
 
 /// Columns of a case with its result summary (`cases c LEFT JOIN results r`).
@@ -19,6 +39,10 @@ pub(crate) const CASE_COLUMNS: &str = "c.id, c.case_key, c.solver_version, c.par
 
 pub(crate) const SWEEP_COLUMNS: &str = "id, name, preset, spec, varied, state, created_at, updated_at";
 
+/// Some active sweep wants case `c` (it may be claimed).
+pub(crate) const CLAIMABLE: &str = "EXISTS (SELECT 1 FROM sweep_cases sc JOIN sweeps s ON s.id = sc.sweep_id \
+    WHERE sc.case_id = c.id AND s.state = 'active')";
+
 /// Some sweep that is not cancelled (active or paused) still wants case `c`.
 pub(crate) const WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JOIN sweeps ws ON ws.id = w.sweep_id \
     WHERE w.case_id = c.id AND ws.state != 'cancelled')";
@@ -27,7 +51,7 @@ pub(crate) fn json<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> St
     serde_json::from_str(text).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
 }
 
-pub(crate) fn sweep_from_row(r: &impl Columns) -> StoreResult<SweepRecord> {
+pub(crate) fn sweep_from_row(r: &AnyRow) -> StoreResult<SweepRecord> {
     Ok(SweepRecord {
         id: r.int("id")?,
         name: r.text_or_null("name")?,
@@ -40,7 +64,21 @@ pub(crate) fn sweep_from_row(r: &impl Columns) -> StoreResult<SweepRecord> {
     })
 }
 
-pub(crate) fn case_from_row(r: &impl Columns) -> StoreResult<CaseRecord> {
+/// The claim a claimed row (`id, case_key, params, fence, attempts`) gives `owner`.
+pub(crate) fn claim_from_row(r: &AnyRow, owner: &str) -> StoreResult<Claim> {
+    Ok(Claim {
+        lease: Lease {
+            case_id: r.int("id")?,
+            owner: owner.to_string(),
+            fence: r.int("fence")?,
+        },
+        key: r.text("case_key")?,
+        params: json(&r.text("params")?, "case params")?,
+        attempt: r.int("attempts")? as u32,
+    })
+}
+
+pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     let result = match r.text_or_null("outcome")? {
         None => None,
         Some(outcome) => Some(ResultSummary {

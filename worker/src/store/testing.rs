@@ -1,7 +1,7 @@
 //! Unit checks of the store, one function per concern (sweeps, claims,
-//! results), written once and run by each backend's submodule on a fresh
-//! database. The trait methods delegate one-to-one to the submodule functions,
-//! so each check exercises the functions of its concern.
+//! results), written once and run by each backend's tests on a fresh
+//! database: the shared code of `sql/` on both, and each backend's own claim,
+//! locks and notifications.
 use super::postgres::PgStore;
 use super::sqlite::{SqliteOptions, SqliteStore};
 use super::*;

@@ -1,13 +1,10 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
-mod bench_queue;
-mod bench_soak;
 mod queue_args;
 mod reproduce;
 mod run;
 mod serve;
 mod simplified;
-mod simplified_doc;
 mod snapshots;
 mod sweep;
 mod validate;
@@ -46,10 +43,6 @@ enum Command {
     Worker(worker::Args),
     /// Run a sweep locally (resumable) and write its phase diagram.
     Sweep(sweep::Args),
-    /// Measure the queue's throughput (claims and completions of no-op cases).
-    BenchQueue(bench_queue::Args),
-    /// Soak the service: many clients submitting, polling and cancelling for a while.
-    BenchSoak(bench_soak::Args),
 }
 
 fn main() {
@@ -68,8 +61,6 @@ fn main() {
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),
-        Command::BenchQueue(args) => bench_queue::run(args),
-        Command::BenchSoak(args) => bench_soak::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -2,7 +2,7 @@
 //! bar; writes the JSON report, optionally the series as CSV and SVG plots.
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use knotsweep_server::figures::{CaseCurve, Quantity, tightening_chart};
+use report::charts::{Quantity, case_chart};
 use serde_json::Value;
 use solver::case::{CaseParams, PARAMETERS, Parameter};
 use solver::protocol::{self, CaseReport, Status};
@@ -201,15 +201,9 @@ pub fn run(args: Args) -> Result<()> {
 /// F bar and H bar against l_k bar, with the inversion marked.
 fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let p = &report.params;
-    let label = format!("n = {}, h = {} mm, mu = {}", p.n, p.h * 1e3, p.mu);
-    let case = [CaseCurve {
-        label: label.clone(),
-        series: &report.series,
-        inversion: report.inversion.map(|i| i.l_k_bar),
-    }];
+    let inversion = report.inversion.map(|i| i.l_k_bar);
     for (file, quantity) in [("F_bar.svg", Quantity::FBar), ("H_bar.svg", Quantity::HBar)] {
-        let svg = tightening_chart(&label, quantity, &case)?;
+        let svg = case_chart(&report.params, &report.series, inversion, quantity)?;
         let path = dir.join(file);
         std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
     }

@@ -1,8 +1,8 @@
 //! `knotsweep simplified`: the simplified knot model of paper Sec. 5 — the
 //! energy landscape E bar(theta), the bifurcation diagram, and the document
 //! `docs/SIMPLIFIED_MODEL.md` with its figures.
-use crate::simplified_doc::SimplifiedDocument;
 use anyhow::{Context, Result};
+use report::simplified_doc::SimplifiedDocument;
 use solver::simplified::{self, BifurcationSpec, LandscapeSpec, Params, ReproductionSpec};
 use std::path::{Path, PathBuf};
 
@@ -110,7 +110,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             write(&a.out, &serde_json::to_string_pretty(&l)?)?;
             if let Some(p) = &a.svg {
-                write(p, &knotsweep_server::figures::simplified::landscape(&l))?;
+                write(p, &report::simplified::landscape(&l))?;
             }
         }
         Command::Bifurcation(a) => {
@@ -124,7 +124,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             write(&a.out, &serde_json::to_string_pretty(&b)?)?;
             if let Some(p) = &a.svg {
-                write(p, &knotsweep_server::figures::simplified::bifurcation(&b, &[]))?;
+                write(p, &report::simplified::bifurcation(&b, &[]))?;
             }
         }
         Command::Doc(a) => {

@@ -18,22 +18,21 @@
 //! at most [`Limits::max_cases`] cases per sweep (422 beyond). With a token
 //! configured (`KNOTSWEEP_TOKEN`), every request other than GET/HEAD/OPTIONS
 //! needs `Authorization: Bearer <token>` (401 otherwise).
-use crate::core::{self, Core};
+use crate::core::Core;
 use crate::error::{ApiError, ErrorBody};
-use crate::figures::Quantity;
+use crate::extract::{Id, Page, Paging, Submission};
 use crate::spec::{FieldError, Limits, Preset, SweepSpec};
 use crate::views::*;
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{DefaultBodyLimit, FromRequestParts, Path, Request, State};
-use axum::http::request::Parts;
-use axum::http::{HeaderMap, HeaderValue, Method, StatusCode, header};
+use axum::extract::{DefaultBodyLimit, FromRef, Path, Request, State};
+use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
-use futures_util::Stream;
+use futures_util::{Stream, StreamExt};
+use knotsweep_worker::store::SweepAction;
+use report::charts::Quantity;
 use std::convert::Infallible;
 use std::time::Duration;
 use tokio::sync::watch;
@@ -52,6 +51,12 @@ pub struct App {
     pub shutdown: watch::Receiver<bool>,
     /// Interval of the event streams' polls.
     pub events_interval: Duration,
+}
+
+impl FromRef<App> for Limits {
+    fn from_ref(app: &App) -> Self {
+        *app.core.limits()
+    }
 }
 
 /// The router with every route, the auth layer and the body limit.
@@ -136,23 +141,6 @@ impl Modify for Extras {
             "bearer",
             SecurityScheme::Http(HttpBuilder::new().scheme(HttpAuthScheme::Bearer).build()),
         );
-    }
-}
-
-/// A numeric path id; anything else is a 400 naming the field.
-pub struct Id(pub i64);
-
-impl<S: Send + Sync> FromRequestParts<S> for Id {
-    type Rejection = ApiError;
-
-    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, Self::Rejection> {
-        match Path::<i64>::from_request_parts(parts, state).await {
-            Ok(Path(id)) => Ok(Id(id)),
-            Err(e) => Err(ApiError::bad_request(
-                "id",
-                format!("must be an integer ({})", e.body_text()),
-            )),
-        }
     }
 }
 
@@ -298,50 +286,13 @@ async fn list_presets() -> Json<Vec<Preset>> {
         (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
     ),
     security((), ("bearer" = [])))]
-async fn submit_sweep(
-    State(app): State<App>,
-    headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let limit = app.core.limits().max_body_bytes;
-    let body = body.map_err(|e| {
-        let status = e.status();
-        let kind = if status == StatusCode::PAYLOAD_TOO_LARGE {
-            "payload_too_large"
-        } else {
-            "bad_request"
-        };
-        let reason = format!("{} (limit {limit} bytes)", e.body_text());
-        ApiError::new(
-            status,
-            kind,
-            reason.clone(),
-            vec![FieldError::new("body", reason)],
-        )
-    })?;
-    if let Some(ct) = headers.get(header::CONTENT_TYPE) {
-        let media = ct.to_str().unwrap_or("").split(';').next().unwrap_or("").trim();
-        if !media.eq_ignore_ascii_case("application/json") {
-            return Err(ApiError::new(
-                StatusCode::UNSUPPORTED_MEDIA_TYPE,
-                "unsupported_media_type",
-                format!("Content-Type must be application/json, got {media:?}"),
-                vec![FieldError::new("Content-Type", "must be application/json")],
-            ));
-        }
-    }
-    if headers.get_all("idempotency-key").iter().count() > 1 {
-        return Err(ApiError::bad_request("Idempotency-Key", "given more than once"));
-    }
-    let key = match headers.get("idempotency-key") {
-        None => None,
-        Some(v) => Some(
-            v.to_str()
-                .map_err(|_| ApiError::bad_request("Idempotency-Key", "must be printable ASCII"))?,
-        ),
-    };
-    let (spec, raw) = Core::parse_spec(&body)?;
-    let response = app.core.submit(spec, &raw, key).await?;
+async fn submit_sweep(State(app): State<App>, submission: Submission) -> Result<Response, ApiError> {
+    let Submission {
+        idempotency_key,
+        spec,
+        raw,
+    } = submission;
+    let response = app.core.submit(spec, &raw, idempotency_key.as_deref()).await?;
     let status = if response.replayed {
         StatusCode::OK
     } else {
@@ -352,48 +303,20 @@ async fn submit_sweep(
     Ok((status, [(header::LOCATION, location)], Json(response)).into_response())
 }
 
-/// Largest `limit` of a paginated list.
-const MAX_PAGE: usize = 1000;
-
-/// One page of a list (`GET /api/sweeps`, `GET /api/sweeps/{id}/cases`).
-#[derive(serde::Deserialize, utoipa::IntoParams)]
-struct Page {
-    /// Items per page, 1..=1000 (default 100).
-    limit: Option<usize>,
-    /// Items to skip, in the list's order (default 0).
-    offset: Option<usize>,
-}
-
 /// Sweeps with their counts per status, oldest first, a page at a time:
 /// `X-Total-Count` gives the number of sweeps and `Link` the next page.
 #[utoipa::path(get, path = "/api/sweeps", tag = "sweeps", params(Page),
     responses((status = 200, body = Vec<SweepSummary>), (status = 400, body = ErrorBody)))]
-async fn list_sweeps(State(app): State<App>, page: PageQuery) -> Result<Response, ApiError> {
-    let (limit, offset) = page_of(page)?;
-    let (sweeps, total) = app.core.list_sweeps(limit, offset).await?;
-    Ok(page_response(sweeps, total, (limit, offset), "/api/sweeps"))
-}
-
-type PageQuery = Result<axum::extract::Query<Page>, axum::extract::rejection::QueryRejection>;
-
-/// The page asked for: `limit` in 1..=MAX_PAGE (default 100), `offset` (default 0).
-fn page_of(page: PageQuery) -> Result<(usize, usize), ApiError> {
-    let page = page.map_err(|e| ApiError::bad_request("query", e.body_text()))?.0;
-    let limit = page.limit.unwrap_or(100);
-    if !(1..=MAX_PAGE).contains(&limit) {
-        return Err(ApiError::bad_request(
-            "limit",
-            format!("must be in 1..={MAX_PAGE}, got {limit}"),
-        ));
-    }
-    Ok((limit, page.offset.unwrap_or(0)))
+async fn list_sweeps(State(app): State<App>, page: Paging) -> Result<Response, ApiError> {
+    let (sweeps, total) = app.core.list_sweeps(page.limit, page.offset).await?;
+    Ok(page_response(sweeps, total, page, "/api/sweeps"))
 }
 
 /// One page of `all` as JSON, with `X-Total-Count` and a `Link: rel="next"`.
-fn paginate<T: serde::Serialize>(all: Vec<T>, (limit, offset): (usize, usize), path: &str) -> Response {
+fn paginate<T: serde::Serialize>(all: Vec<T>, page: Paging, path: &str) -> Response {
     let total = all.len();
-    let items: Vec<T> = all.into_iter().skip(offset).take(limit).collect();
-    page_response(items, total, (limit, offset), path)
+    let items: Vec<T> = all.into_iter().skip(page.offset).take(page.limit).collect();
+    page_response(items, total, page, path)
 }
 
 /// `items`, the page at `offset` of a list of `total`, as JSON with
@@ -401,7 +324,7 @@ fn paginate<T: serde::Serialize>(all: Vec<T>, (limit, offset): (usize, usize), p
 fn page_response<T: serde::Serialize>(
     items: Vec<T>,
     total: usize,
-    (limit, offset): (usize, usize),
+    Paging { limit, offset }: Paging,
     path: &str,
 ) -> Response {
     let mut response = Json(items).into_response();
@@ -420,8 +343,7 @@ fn page_response<T: serde::Serialize>(
     responses((status = 200, body = [SweepCaseView], headers(("x-total-count" = usize, description = "Cases in the sweep"),
         ("link" = String, description = "The next page, when there is one"))),
         (status = 400, body = ErrorBody), (status = 404, body = ErrorBody)))]
-async fn sweep_cases(State(app): State<App>, Id(id): Id, page: PageQuery) -> Result<Response, ApiError> {
-    let page = page_of(page)?;
+async fn sweep_cases(State(app): State<App>, Id(id): Id, page: Paging) -> Result<Response, ApiError> {
     let detail = app.core.sweep(id).await?;
     Ok(paginate(detail.cases, page, &format!("/api/sweeps/{id}/cases")))
 }
@@ -433,18 +355,13 @@ async fn get_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetai
     Ok(Json(app.core.sweep(id).await?))
 }
 
-async fn control(app: App, id: i64, name: &str) -> Result<Json<SweepDetail>, ApiError> {
-    let action = core::action(name).expect("route names an action");
-    Ok(Json(app.core.control(id, action).await?))
-}
-
 /// Pause: queued cases are not handed out (running ones finish).
 #[utoipa::path(post, path = "/api/sweeps/{id}/pause", tag = "sweeps", params(("id" = i64, Path)),
     responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody),
         (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
     security((), ("bearer" = [])))]
 async fn pause_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
-    control(app, id, "pause").await
+    Ok(Json(app.core.control(id, SweepAction::Pause).await?))
 }
 
 /// Resume a paused sweep.
@@ -453,7 +370,7 @@ async fn pause_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDet
         (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
     security((), ("bearer" = [])))]
 async fn resume_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
-    control(app, id, "resume").await
+    Ok(Json(app.core.control(id, SweepAction::Resume).await?))
 }
 
 /// Cancel: queued cases are cancelled, running ones stop at their next
@@ -462,15 +379,7 @@ async fn resume_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDe
     responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody)),
     security((), ("bearer" = [])))]
 async fn cancel_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
-    control(app, id, "cancel").await
-}
-
-struct EventState {
-    app: App,
-    id: i64,
-    pending: Option<SweepDetail>,
-    last: Option<String>,
-    done: bool,
+    Ok(Json(app.core.control(id, SweepAction::Cancel).await?))
 }
 
 /// Server-sent events: `progress` (a [`SweepEvent`]) whenever the sweep
@@ -482,44 +391,13 @@ async fn sweep_events(
     State(app): State<App>,
     Id(id): Id,
 ) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
-    let first = app.core.sweep(id).await?;
-    let state = EventState {
-        app,
-        id,
-        pending: Some(first),
-        last: None,
-        done: false,
-    };
-    let stream = futures_util::stream::unfold(state, |mut st| async move {
-        if st.done {
-            return None;
-        }
-        loop {
-            let detail = match st.pending.take() {
-                Some(d) => d,
-                None => {
-                    let mut shutdown = st.app.shutdown.clone();
-                    if *shutdown.borrow() {
-                        return None;
-                    }
-                    tokio::select! {
-                        _ = tokio::time::sleep(st.app.events_interval) => {}
-                        _ = shutdown.changed() => return None,
-                    }
-                    st.app.core.sweep(st.id).await.ok()?
-                }
-            };
-            let event = SweepEvent::from(&detail);
-            let data = serde_json::to_string(&event).expect("event serialises");
-            if matches!(event.status, SweepStatus::Done | SweepStatus::Cancelled) {
-                st.done = true;
-                return Some((Ok(Event::default().event("done").data(data)), st));
-            }
-            if st.last.as_deref() != Some(data.as_str()) {
-                st.last = Some(data.clone());
-                return Some((Ok(Event::default().event("progress").data(data)), st));
-            }
-        }
+    let updates = app
+        .core
+        .events(id, app.events_interval, app.shutdown.clone())
+        .await?;
+    let stream = updates.map(|update| {
+        let data = serde_json::to_string(update.event()).expect("event serialises");
+        Ok(Event::default().event(update.name()).data(data))
     });
     Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(Duration::from_secs(15))))
 }

@@ -1,39 +1,24 @@
 //! The typed core of the service: every operation of the API (and of
-//! `knotsweep sweep`) as a method over the store. The HTTP handlers in
-//! [`crate::api`] only extract, call one of these and serialise.
+//! `knotsweep sweep`) as a method over the store, returning the views of
+//! [`crate::views`]. The HTTP handlers in [`crate::api`] only extract, call
+//! one of these and serialise.
 use crate::error::CoreError;
-use crate::figures::{self, CaseCurve, Quantity};
-use crate::spec::{self, FieldError, Limits, SweepSpec};
+use crate::spec::{self, Expanded, FieldError, Limits, SweepSpec};
 use crate::strict_json;
 use crate::views::*;
+use futures_util::Stream;
 use knotsweep_worker::pool::PoolHandle;
 use knotsweep_worker::store::{
-    CaseRecord, CaseState, CreateOutcome, Idempotency, NewCase, NewSweep, Store, SweepAction, SweepCase,
-    SweepRecord, SweepState,
+    CaseRecord, CreateOutcome, Idempotency, NewCase, NewSweep, Store, SweepAction, SweepRecord,
 };
+use report::charts::{self, CaseCurve, Quantity};
 use serde_json::Value;
 use solver::measurements::Sample;
-use solver::protocol::Status;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
-use std::fmt::Write;
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
-
-/// Status words of cases, in the order metrics list them: the queue states
-/// before a result, the solver's outcomes, then the queue's failures.
-pub fn status_words() -> Vec<String> {
-    let queue = |s: CaseState| s.as_str().to_string();
-    let outcomes = Status::ALL
-        .into_iter()
-        .filter(|s| *s != Status::Cancelled)
-        .map(|s| s.to_string());
-    [queue(CaseState::Queued), queue(CaseState::Running)]
-        .into_iter()
-        .chain(outcomes)
-        .chain([queue(CaseState::Failed), queue(CaseState::Cancelled)])
-        .collect()
-}
+use std::time::{Duration, Instant};
+use tokio::sync::watch;
 
 /// The service's operations.
 #[derive(Clone)]
@@ -114,47 +99,17 @@ impl Core {
         idempotency_key: Option<&str>,
     ) -> Result<SubmitResponse, CoreError> {
         if let Some(key) = idempotency_key {
-            if key.is_empty() || key.chars().count() > self.limits.max_idempotency_key_len {
-                return Err(CoreError::BadRequest(
-                    "Idempotency-Key".to_string(),
-                    format!(
-                        "must have 1 to {} characters",
-                        self.limits.max_idempotency_key_len
-                    ),
-                ));
-            }
-            if !key.chars().all(|c| c.is_ascii_graphic()) {
-                return Err(CoreError::BadRequest(
-                    "Idempotency-Key".to_string(),
-                    "must be printable ASCII without spaces".to_string(),
-                ));
-            }
+            self.check_idempotency_key(key)?;
         }
         let expanded = spec::expand(&spec, &self.limits).map_err(CoreError::Invalid)?;
-        let request_hash = blake3::hash(knotsweep_worker::canonical_value(raw).as_bytes())
-            .to_hex()
-            .to_string();
-        let new = NewSweep {
-            name: expanded.name.clone(),
-            preset: expanded.preset.clone(),
-            spec: serde_json::to_value(&spec).expect("spec serialises"),
-            varied: expanded.varied.clone(),
-            cases: expanded
-                .cases
-                .iter()
-                .map(|c| NewCase::new(c.params.clone()))
-                .collect(),
-            idempotency: idempotency_key.map(|key| Idempotency {
-                key: key.to_string(),
-                request_hash,
-            }),
-        };
+        let cases = expanded.cases.len();
+        let new = new_sweep(&spec, raw, expanded, idempotency_key);
         let (record, replayed) = match self.store.create_sweep(new).await? {
             CreateOutcome::Created { sweep, cached } => {
                 tracing::info!(
                     sweep_id = sweep.id,
                     preset = ?sweep.preset,
-                    cases = expanded.cases.len(),
+                    cases,
                     cached,
                     "sweep accepted"
                 );
@@ -171,8 +126,22 @@ impl Core {
         let cases = self.store.sweep_cases(record.id).await?;
         Ok(SubmitResponse {
             replayed,
-            sweep: detail(&record, &cases),
+            sweep: SweepDetail::from((&record, &cases[..])),
         })
+    }
+
+    /// An `Idempotency-Key` has 1 to `max_idempotency_key_len` printable
+    /// ASCII characters, no spaces (400 otherwise).
+    fn check_idempotency_key(&self, key: &str) -> Result<(), CoreError> {
+        let bad = |reason: String| Err(CoreError::BadRequest("Idempotency-Key".to_string(), reason));
+        let longest = self.limits.max_idempotency_key_len;
+        if key.is_empty() || key.chars().count() > longest {
+            return bad(format!("must have 1 to {longest} characters"));
+        }
+        if !key.chars().all(|c| c.is_ascii_graphic()) {
+            return bad("must be printable ASCII without spaces".to_string());
+        }
+        Ok(())
     }
 
     /// At most `limit` sweeps from the `offset`-th, oldest first, with their
@@ -194,7 +163,7 @@ impl Core {
         }
         let summaries = sweeps
             .iter()
-            .map(|s| summary(s, counts.remove(&s.id).unwrap_or_default()))
+            .map(|s| SweepSummary::from((s, counts.remove(&s.id).unwrap_or_default())))
             .collect();
         Ok((summaries, total as usize))
     }
@@ -209,7 +178,31 @@ impl Core {
     pub async fn sweep(&self, id: i64) -> Result<SweepDetail, CoreError> {
         let record = self.record(id).await?;
         let cases = self.store.sweep_cases(id).await?;
-        Ok(detail(&record, &cases))
+        Ok(SweepDetail::from((&record, &cases[..])))
+    }
+
+    /// The sweep's progress as a stream: an update whenever it changes (polled
+    /// every `interval`), then a last one when it is finished or cancelled; it
+    /// also ends when `shutdown` turns true. 404 when there is no such sweep.
+    pub async fn events(
+        &self,
+        id: i64,
+        interval: Duration,
+        shutdown: watch::Receiver<bool>,
+    ) -> Result<impl Stream<Item = SweepUpdate> + use<>, CoreError> {
+        let state = EventState {
+            core: self.clone(),
+            id,
+            interval,
+            shutdown,
+            pending: Some(self.sweep(id).await?),
+            last: None,
+            done: false,
+        };
+        Ok(futures_util::stream::unfold(state, |mut st| async move {
+            let update = st.next().await?;
+            Some((update, st))
+        }))
     }
 
     /// Pause (queued cases are not handed out; running ones finish), resume,
@@ -229,43 +222,23 @@ impl Core {
             "sweep control"
         );
         let cases = self.store.sweep_cases(id).await?;
-        Ok(detail(&record, &cases))
+        Ok(SweepDetail::from((&record, &cases[..])))
     }
 
     pub async fn phase_diagram(&self, id: i64) -> Result<PhaseDiagram, CoreError> {
         let record = self.record(id).await?;
         let cases = self.store.sweep_cases(id).await?;
-        let d = detail(&record, &cases);
         let spec: SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
         let base = spec::base_params(&spec)
             .map(|p| serde_json::to_value(p).expect("params serialise"))
             .unwrap_or(Value::Null);
-        Ok(PhaseDiagram {
-            sweep_id: record.id,
-            name: record.name.clone(),
-            preset: record.preset.clone(),
-            status: d.summary.status,
-            complete: cases.iter().all(|c| c.case.state.is_terminal()),
-            varied: record.varied.clone(),
-            base,
-            solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
-            physics_revision: solver::case::PHYSICS_REVISION,
-            points: futures_util::future::join_all(d.cases.into_iter().zip(&cases).map(
-                |(c, full)| async move {
-                    PhasePoint {
-                        case_id: c.case_id,
-                        params: c.params,
-                        status: c.status,
-                        inversion: c.inversion,
-                        reason: c.reason,
-                        simplified_l_k_bar: self
-                            .simplified_snap(full.case.params.n, full.case.params.h)
-                            .await,
-                    }
-                },
-            ))
-            .await,
-        })
+        let simplified = futures_util::future::join_all(
+            cases
+                .iter()
+                .map(|c| self.simplified_snap(c.case.params.n, c.case.params.h)),
+        )
+        .await;
+        Ok(PhaseDiagram::new(&record, &cases, base, simplified))
     }
 
     /// The phase diagram as SVG: critical l_k bar against the first varied
@@ -297,7 +270,7 @@ impl Core {
         } else {
             axis.clone()
         };
-        figures::phase_chart(
+        charts::phase_chart(
             &format!("sweep {id}: critical l_k bar against {x_label}"),
             &x_label,
             &points,
@@ -348,53 +321,8 @@ impl Core {
             ),
             None => None,
         };
-        let logs = self
-            .store
-            .case_logs(id)
-            .await?
-            .into_iter()
-            .map(|l| LogLineView {
-                at: l.at,
-                level: l.level,
-                message: l.message,
-            })
-            .collect();
-        let links = BTreeMap::from([
-            ("self".to_string(), format!("/api/cases/{id}")),
-            ("series_csv".to_string(), format!("/api/cases/{id}/series.csv")),
-            ("frames".to_string(), format!("/api/cases/{id}/frames")),
-        ]);
-        Ok(CaseDetail {
-            id: c.id,
-            key: c.key.clone(),
-            solver_version: c.solver_version.clone(),
-            params: serde_json::to_value(&c.params).expect("params serialise"),
-            status: c.status().to_string(),
-            state: c.state.as_str().to_string(),
-            attempts: c.attempts,
-            max_attempts: c.max_attempts,
-            progress: c.progress,
-            progress_detail: progress_of(&c),
-            lease_owner: c.lease_owner.clone(),
-            lease_expires_at: c.lease_expires_at,
-            last_error: c.last_error.clone(),
-            created_at: c.created_at,
-            started_at: c.started_at,
-            finished_at: c.finished_at,
-            sweeps,
-            result: c.result.as_ref().map(|r| ResultView {
-                outcome: r.outcome.clone(),
-                reason: r.reason.clone(),
-                inversion: r.inversion.as_ref().map(InversionPoint::from),
-                summary: r.summary.clone(),
-                wall_time: r.wall_time,
-                worker: r.worker.clone(),
-                created_at: r.created_at,
-            }),
-            series,
-            logs,
-            links,
-        })
+        let logs = self.store.case_logs(id).await?;
+        Ok(CaseDetail::new(&c, sweeps, series, logs))
     }
 
     /// A case's stored series; 404 before the result.
@@ -418,14 +346,8 @@ impl Core {
     pub async fn case_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
         let series = self.series(&c).await?;
-        let p = &c.params;
-        let label = format!("n = {}, h = {} mm, mu = {}", p.n, p.h * 1e3, p.mu);
-        let curve = CaseCurve {
-            label: label.clone(),
-            series: &series,
-            inversion: inversion_of(&c),
-        };
-        figures::tightening_chart(&label, quantity, &[curve]).map_err(|e| CoreError::Figure(e.to_string()))
+        charts::case_chart(&c.params, &series, inversion_of(&c), quantity)
+            .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
     /// The curves of every finished case of a sweep overlaid (grid order),
@@ -436,7 +358,7 @@ impl Core {
         // The sweep's case rows already hold their result summaries: only the series are read.
         for s in self.store.sweep_cases(id).await? {
             if s.case.result.is_some() {
-                let label = case_view(&s, &record.varied)
+                let label = SweepCaseView::from((&s, &record.varied[..]))
                     .params
                     .iter()
                     .map(|(k, v)| format!("{k} = {v}"))
@@ -457,7 +379,7 @@ impl Core {
                 inversion: *inversion,
             })
             .collect();
-        figures::tightening_chart(&format!("sweep {id}"), quantity, &curves)
+        charts::tightening_chart(&format!("sweep {id}"), quantity, &curves)
             .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
@@ -491,246 +413,110 @@ impl Core {
     /// Prometheus text: cases by status and queue depth (from the store, so
     /// across every process), this process's workers' counters.
     pub async fn metrics(&self) -> Result<String, CoreError> {
-        let counts: BTreeMap<String, i64> = self.store.status_counts().await?.into_iter().collect();
-        let depth = self.store.queue_depth().await?;
-        let mut by_status: BTreeMap<SweepStatus, usize> = BTreeMap::new();
+        let metrics = Metrics {
+            cases: self.store.status_counts().await?.into_iter().collect(),
+            queue_depth: self.store.queue_depth().await?,
+            sweeps: self.sweeps_by_status().await?,
+            workers: self.pool.as_ref().map_or(0, |p| p.workers()),
+        };
+        let mut out = metrics.render();
+        if let Some(pool) = &self.pool {
+            pool.metrics.render(&mut out);
+        }
+        Ok(out)
+    }
+
+    /// The number of sweeps per status, read a page at a time.
+    async fn sweeps_by_status(&self) -> Result<BTreeMap<SweepStatus, usize>, CoreError> {
+        let mut sweeps: BTreeMap<SweepStatus, usize> = BTreeMap::new();
         for offset in (0..).step_by(METRICS_PAGE) {
             let (page, _) = self.list_sweeps(METRICS_PAGE, offset).await?;
             for s in &page {
-                *by_status.entry(s.status).or_default() += 1;
+                *sweeps.entry(s.status).or_default() += 1;
             }
             if page.len() < METRICS_PAGE {
                 break;
             }
         }
-        let mut out = String::new();
-        let _ = writeln!(
-            out,
-            "# HELP knotsweep_cases Cases by status.\n# TYPE knotsweep_cases gauge"
-        );
-        for word in status_words() {
-            let _ = writeln!(
-                out,
-                "knotsweep_cases{{status=\"{word}\"}} {}",
-                counts.get(&word).copied().unwrap_or(0)
-            );
-        }
-        let _ = writeln!(
-            out,
-            "# HELP knotsweep_queue_depth Queued cases of active sweeps.\n# TYPE knotsweep_queue_depth gauge\nknotsweep_queue_depth {depth}"
-        );
-        let _ = writeln!(
-            out,
-            "# HELP knotsweep_sweeps Sweeps by status (as GET /api/sweeps reports it: a sweep whose cases all finished is done).\n# TYPE knotsweep_sweeps gauge"
-        );
-        for status in [
-            SweepStatus::Queued,
-            SweepStatus::Running,
-            SweepStatus::Paused,
-            SweepStatus::Done,
-            SweepStatus::Cancelled,
-        ] {
-            let n = by_status.get(&status).copied().unwrap_or(0);
-            let word = serde_json::to_value(status).expect("status serialises");
-            let _ = writeln!(
-                out,
-                "knotsweep_sweeps{{status=\"{}\"}} {n}",
-                word.as_str().unwrap_or_default()
-            );
-        }
-        let _ = writeln!(
-            out,
-            "# HELP knotsweep_workers Embedded worker slots.\n# TYPE knotsweep_workers gauge\nknotsweep_workers {}",
-            self.pool.as_ref().map_or(0, |p| p.workers())
-        );
-        if let Some(pool) = &self.pool {
-            pool.metrics.render(&mut out);
-        }
-        Ok(out)
+        Ok(sweeps)
     }
 }
 
 /// Sweeps read per page when the metrics count them.
 const METRICS_PAGE: usize = 1000;
 
-/// The solver's progress of a running case; none once it has stopped running
-/// (a finished case's last heartbeat is not its progress).
-fn progress_of(c: &CaseRecord) -> Option<CaseProgress> {
-    if c.state != CaseState::Running {
-        return None;
-    }
-    c.progress_detail.map(|p| CaseProgress {
-        fraction: p.fraction,
-        l_k_bar: p.l_k_bar,
-        h_bar: p.h_bar,
-        steps: p.steps,
-    })
-}
-
-fn links(id: i64) -> BTreeMap<String, String> {
-    BTreeMap::from([
-        ("self".to_string(), format!("/api/sweeps/{id}")),
-        (
-            "phase_diagram".to_string(),
-            format!("/api/sweeps/{id}/phase-diagram"),
-        ),
-        ("events".to_string(), format!("/api/sweeps/{id}/events")),
-        ("cases".to_string(), format!("/api/sweeps/{id}/cases")),
-    ])
-}
-
-fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
-    let open = |w: &str| counts.get(w).copied().unwrap_or(0);
-    let (queued, running) = (
-        open(CaseState::Queued.as_str()),
-        open(CaseState::Running.as_str()),
-    );
-    match state {
-        SweepState::Cancelled => SweepStatus::Cancelled,
-        _ if queued + running == 0 => SweepStatus::Done,
-        SweepState::Paused => SweepStatus::Paused,
-        SweepState::Active if running == 0 && counts.values().sum::<i64>() == queued => SweepStatus::Queued,
-        SweepState::Active => SweepStatus::Running,
-    }
-}
-
-fn summary(s: &SweepRecord, counts: BTreeMap<String, i64>) -> SweepSummary {
-    SweepSummary {
-        id: s.id,
-        name: s.name.clone(),
-        preset: s.preset.clone(),
-        state: s.state.as_str().to_string(),
-        status: status_of(s.state, &counts),
-        total: counts.values().sum(),
-        counts,
-        created_at: s.created_at,
-        links: links(s.id),
-    }
-}
-
-/// Why a case has no inversion point (None when it has one).
-fn reason_of(c: &CaseRecord) -> Option<String> {
-    match (&c.result, c.state) {
-        (Some(r), _) if r.inversion.is_some() => None,
-        (Some(r), _) if r.outcome == "completed" => Some(match c.params.max_force_bar {
-            Some(f) => format!(
-                "no inversion detected before the case stopped (at l_k bar {} or F bar {f})",
-                c.params.min_l_k_bar
-            ),
-            None => format!(
-                "no inversion detected before the case stopped (at l_k bar {})",
-                c.params.min_l_k_bar
-            ),
-        }),
-        (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
-        (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
-        (None, CaseState::Cancelled) => Some(CaseState::Cancelled.as_str().to_string()),
-        (None, CaseState::Queued) => Some(match &c.last_error {
-            Some(e) => format!("not computed yet (queued; last attempt: {e})"),
-            None => "not computed yet (queued)".to_string(),
-        }),
-        (None, CaseState::Running) => Some("not computed yet (running)".to_string()),
-        (None, CaseState::Done) => Some("result missing".to_string()),
-    }
-}
-
-fn case_view(s: &SweepCase, varied: &[String]) -> SweepCaseView {
-    let c = &s.case;
-    let params = serde_json::to_value(&c.params).expect("params serialise");
-    SweepCaseView {
-        case_id: c.id,
-        position: s.position,
-        params: varied
-            .iter()
-            .map(|name| (name.clone(), params.get(name).cloned().unwrap_or(Value::Null)))
-            .collect(),
-        status: c.status().to_string(),
-        cached: s.cached,
-        attempts: c.attempts,
-        progress: if c.state == CaseState::Done {
-            1.0
-        } else {
-            c.progress
-        },
-        progress_detail: progress_of(c),
-        inversion: c
-            .result
-            .as_ref()
-            .and_then(|r| r.inversion.as_ref())
-            .map(InversionPoint::from),
-        reason: reason_of(c),
-        wall_time: c.result.as_ref().map(|r| r.wall_time),
-    }
-}
-
-/// The sweep's view: counts, progress, ETA and cases.
-pub fn detail(record: &SweepRecord, cases: &[SweepCase]) -> SweepDetail {
-    let mut counts: BTreeMap<String, i64> = BTreeMap::new();
-    for c in cases {
-        *counts.entry(c.case.status().to_string()).or_default() += 1;
-    }
-    let views: Vec<SweepCaseView> = cases.iter().map(|c| case_view(c, &record.varied)).collect();
-    let total = cases.len().max(1) as f64;
-    let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
-    let running: Vec<&SweepCase> = cases
-        .iter()
-        .filter(|c| c.case.state == CaseState::Running)
-        .collect();
-    let running_done: f64 = running.iter().map(|c| c.case.progress).sum();
-    let queued = cases.iter().filter(|c| c.case.state == CaseState::Queued).count() as f64;
-    let summary = summary(record, counts);
-    // ETA: remaining work (queued cases + running remainders) times the mean
-    // case duration (from this sweep's results, else from the running cases'
-    // speed), over the number of cases running in parallel.
-    let durations: Vec<f64> = cases
-        .iter()
-        .filter(|c| !c.cached)
-        .filter_map(|c| c.case.result.as_ref().map(|r| r.wall_time))
-        .collect();
-    let now = knotsweep_worker::store::now_ms();
-    let mean = if durations.is_empty() {
-        let speeds: Vec<f64> = running
-            .iter()
-            .filter(|c| c.case.progress > 0.02)
-            .filter_map(|c| {
-                c.case
-                    .started_at
-                    .map(|t| (now - t) as f64 / 1000.0 / c.case.progress)
-            })
-            .collect();
-        (!speeds.is_empty()).then(|| speeds.iter().sum::<f64>() / speeds.len() as f64)
-    } else {
-        Some(durations.iter().sum::<f64>() / durations.len() as f64)
-    };
-    let remaining = queued + running.len() as f64 - running_done;
-    let eta_seconds = match (summary.status, mean) {
-        (SweepStatus::Running | SweepStatus::Queued, Some(mean)) if !running.is_empty() => {
-            Some(remaining * mean / running.len() as f64)
-        }
-        _ => None,
-    };
-    SweepDetail {
-        varied: record.varied.clone(),
-        spec: record.spec.clone(),
-        progress: ((finished + running_done) / total).clamp(0.0, 1.0),
-        eta_seconds,
-        cached: cases.iter().filter(|c| c.cached).count() as i64,
-        cases: views,
-        summary,
-    }
-}
-
-/// The action named in a control route.
-pub fn action(name: &str) -> Option<SweepAction> {
-    match name {
-        "pause" => Some(SweepAction::Pause),
-        "resume" => Some(SweepAction::Resume),
-        "cancel" => Some(SweepAction::Cancel),
-        _ => None,
-    }
-}
-
 /// l_k bar of a case's inversion, if it has a result with one.
 fn inversion_of(c: &CaseRecord) -> Option<f64> {
     c.result.as_ref().and_then(|r| r.inversion).map(|i| i.l_k_bar)
+}
+
+/// The sweep to store: its cases' parameters and the idempotency key with
+/// the body's hash.
+fn new_sweep(spec: &SweepSpec, raw: &Value, expanded: Expanded, idempotency_key: Option<&str>) -> NewSweep {
+    let request_hash = blake3::hash(knotsweep_worker::canonical_value(raw).as_bytes())
+        .to_hex()
+        .to_string();
+    NewSweep {
+        name: expanded.name,
+        preset: expanded.preset,
+        spec: serde_json::to_value(spec).expect("spec serialises"),
+        varied: expanded.varied,
+        cases: expanded
+            .cases
+            .into_iter()
+            .map(|c| NewCase::new(c.params))
+            .collect(),
+        idempotency: idempotency_key.map(|key| Idempotency {
+            key: key.to_string(),
+            request_hash,
+        }),
+    }
+}
+
+/// Where a sweep's event stream is.
+struct EventState {
+    core: Core,
+    id: i64,
+    interval: Duration,
+    shutdown: watch::Receiver<bool>,
+    /// A detail read but not yet reported.
+    pending: Option<SweepDetail>,
+    /// The last event sent.
+    last: Option<SweepEvent>,
+    done: bool,
+}
+
+impl EventState {
+    /// The next update: the sweep's event when it differs from the last one
+    /// sent, `Done` once finished; none after that, at shutdown or when the
+    /// sweep can no longer be read.
+    async fn next(&mut self) -> Option<SweepUpdate> {
+        if self.done {
+            return None;
+        }
+        loop {
+            let detail = match self.pending.take() {
+                Some(d) => d,
+                None => {
+                    if *self.shutdown.borrow() {
+                        return None;
+                    }
+                    tokio::select! {
+                        _ = tokio::time::sleep(self.interval) => {}
+                        _ = self.shutdown.changed() => return None,
+                    }
+                    self.core.sweep(self.id).await.ok()?
+                }
+            };
+            let event = SweepEvent::from(&detail);
+            if matches!(event.status, SweepStatus::Done | SweepStatus::Cancelled) {
+                self.done = true;
+                return Some(SweepUpdate::Done(event));
+            }
+            if self.last.as_ref() != Some(&event) {
+                self.last = Some(event.clone());
+                return Some(SweepUpdate::Progress(event));
+            }
+        }
+    }
 }

@@ -6,14 +6,15 @@
 //!   the expansion into validated `CaseParams`;
 //! - [`core`]: the typed operations (submit, query, control, phase diagram,
 //!   metrics) over the store (`knotsweep_worker::Store`);
-//! - [`api`]: axum handlers, thin adapters over the core, and the OpenAPI
-//!   document; [`views`] and [`error`]: the JSON they return;
+//! - [`api`]: axum handlers, thin adapters over the core (their inputs read by
+//!   the extractors of `extract`), and the OpenAPI document; [`views`] and
+//!   [`error`]: the JSON they return, built from the store's records;
 //! - [`start`]: the server with its embedded worker pool (one case per core
 //!   on a rayon pool, off the async runtime) and graceful shutdown.
 pub mod api;
 pub mod core;
 pub mod error;
-pub mod figures;
+mod extract;
 mod http;
 pub mod openapi;
 pub mod spec;
@@ -112,23 +113,7 @@ pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> a
         pool.as_ref().map(|p| p.handle()),
     );
     let (shutdown, shutdown_rx) = watch::channel(false);
-    // Expired leases go back to the queue even when no worker is polling.
-    let reaper = {
-        let store = dyn_store.clone();
-        let mut rx = shutdown_rx.clone();
-        let every = (config.lease / 2).max(Duration::from_millis(200));
-        tokio::spawn(async move {
-            loop {
-                tokio::select! {
-                    _ = tokio::time::sleep(every) => {}
-                    _ = rx.changed() => return,
-                }
-                if let Err(e) = store.requeue_expired().await {
-                    tracing::warn!(error = %e, "requeueing expired leases failed");
-                }
-            }
-        })
-    };
+    let reaper = spawn_reaper(dyn_store.clone(), config.lease, shutdown_rx.clone());
     let app = api::App {
         core,
         token: config.token.clone().filter(|t| !t.is_empty()),
@@ -146,6 +131,27 @@ pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> a
         http,
         reaper,
         pool,
+    })
+}
+
+/// Puts expired leases back in the queue every half lease (at least every
+/// 200 ms), even when no worker is polling, until `shutdown` changes.
+fn spawn_reaper(
+    store: Arc<dyn Store>,
+    lease: Duration,
+    mut shutdown: watch::Receiver<bool>,
+) -> JoinHandle<()> {
+    let every = (lease / 2).max(Duration::from_millis(200));
+    tokio::spawn(async move {
+        loop {
+            tokio::select! {
+                _ = tokio::time::sleep(every) => {}
+                _ = shutdown.changed() => return,
+            }
+            if let Err(e) = store.requeue_expired().await {
+                tracing::warn!(error = %e, "requeueing expired leases failed");
+            }
+        }
     })
 }
 

@@ -215,6 +215,46 @@ fn check_object(prefix: &str, object: &Map<String, Value>, names: &[String]) -> 
 /// every problem found (field and reason).
 pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldError>> {
     let mut errors = Vec::new();
+    let preset = check_header(spec, limits, &mut errors);
+    let names = param_names();
+    let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
+    if let Some(given) = &spec.base {
+        errors.extend(check_object("base", given, &names));
+        base.extend(given.clone());
+    }
+    let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
+    let axes = check_grid(grid, &names, &mut errors);
+    let count = axes
+        .iter()
+        .fold(1usize, |n, (_, values)| n.saturating_mul(values.len()));
+    if count > limits.max_cases {
+        errors.push(FieldError::new(
+            "grid",
+            format!(
+                "{count} cases exceed the limit of {} cases per sweep",
+                limits.max_cases
+            ),
+        ));
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    let cases = cartesian(&base, &axes, count, &mut errors);
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(Expanded {
+        name: spec.name.clone(),
+        preset: spec.preset.clone(),
+        base,
+        varied: axes.into_iter().map(|(a, _)| a).collect(),
+        cases,
+    })
+}
+
+/// Checks the name and the preset (known, and not given with a grid);
+/// returns the preset.
+fn check_header(spec: &SweepSpec, limits: &Limits, errors: &mut Vec<FieldError>) -> Option<Preset> {
     if let Some(name) = &spec.name
         && name.chars().count() > limits.max_name_len
     {
@@ -223,35 +263,34 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
             format!("at most {} characters", limits.max_name_len),
         ));
     }
-    let preset = match &spec.preset {
-        None => None,
-        Some(name) => match preset(name) {
-            Some(p) => Some(p),
-            None => {
-                let known: Vec<String> = presets().into_iter().map(|p| p.name).collect();
-                errors.push(FieldError::new(
-                    "preset",
-                    format!("unknown preset {name:?}; known: {}", known.join(", ")),
-                ));
-                None
-            }
-        },
-    };
+    let preset = spec.preset.as_ref().and_then(|name| {
+        let found = preset(name);
+        if found.is_none() {
+            let known: Vec<String> = presets().into_iter().map(|p| p.name).collect();
+            errors.push(FieldError::new(
+                "preset",
+                format!("unknown preset {name:?}; known: {}", known.join(", ")),
+            ));
+        }
+        found
+    });
     if spec.preset.is_some() && spec.grid.is_some() {
         errors.push(FieldError::new(
             "grid",
             "a preset defines the grid: give either preset or grid",
         ));
     }
-    let names = param_names();
-    let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
-    if let Some(given) = &spec.base {
-        errors.extend(check_object("base", given, &names));
-        base.extend(given.clone());
-    }
-    let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
-    let mut axes: Vec<(String, Vec<Value>)> = Vec::new();
-    let mut count: usize = 1;
+    preset
+}
+
+/// The grid's axes with their values, each a known parameter with at least
+/// one value, no duplicates and values of the parameter's type.
+fn check_grid(
+    grid: Option<&BTreeMap<String, Vec<Value>>>,
+    names: &[String],
+    errors: &mut Vec<FieldError>,
+) -> Vec<(String, Vec<Value>)> {
+    let mut axes = Vec::new();
     for (axis, values) in grid.into_iter().flatten() {
         if !names.contains(axis) {
             errors.push(FieldError::new(
@@ -278,22 +317,20 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
                 errors.push(FieldError::new(format!("grid.{axis}[{i}]"), e.to_string()));
             }
         }
-        count = count.saturating_mul(values.len());
         axes.push((axis.clone(), values.clone()));
     }
-    if count > limits.max_cases {
-        errors.push(FieldError::new(
-            "grid",
-            format!(
-                "{count} cases exceed the limit of {} cases per sweep",
-                limits.max_cases
-            ),
-        ));
-    }
-    if !errors.is_empty() {
-        return Err(errors);
-    }
-    // The cartesian product, last axis fastest.
+    axes
+}
+
+/// The `count` cases of the cartesian product of `axes` over `base`, last
+/// axis fastest, each validated (the knot built once per distinct geometry);
+/// stops after 50 problems.
+fn cartesian(
+    base: &Map<String, Value>,
+    axes: &[(String, Vec<Value>)],
+    count: usize,
+    errors: &mut Vec<FieldError>,
+) -> Vec<GridCase> {
     let mut cases = Vec::with_capacity(count);
     let mut builds = solver::case::BuildChecks::default();
     let mut index = vec![0usize; axes.len()];
@@ -332,16 +369,7 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
             break;
         }
     }
-    if !errors.is_empty() {
-        return Err(errors);
-    }
-    Ok(Expanded {
-        name: spec.name.clone(),
-        preset: spec.preset.clone(),
-        base,
-        varied: axes.into_iter().map(|(a, _)| a).collect(),
-        cases,
-    })
+    cases
 }
 
 #[cfg(test)]

@@ -4,9 +4,17 @@
 //! attempts after infrastructure failures), `cancelled`, or, once it has a
 //! result, the solver's status: `completed`, `invalid`, `diverged`,
 //! `penetrated`, `topology_changed`. Times are Unix milliseconds.
+//!
+//! The views are built here from the store's records (`From` impls and
+//! constructors), so the core only gathers the records.
+use knotsweep_worker::store::{
+    CaseRecord, CaseState, LogLine, ResultSummary, SweepCase, SweepRecord, SweepState,
+};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
+use solver::protocol::{Progress, Status};
 use std::collections::BTreeMap;
+use std::fmt::Write;
 use utoipa::ToSchema;
 
 /// Status words of a whole sweep.
@@ -293,7 +301,7 @@ impl From<&SweepDetail> for SweepEvent {
             running: d
                 .cases
                 .iter()
-                .filter(|c| c.status == knotsweep_worker::store::CaseState::Running.as_str())
+                .filter(|c| c.status == CaseState::Running.as_str())
                 .map(|c| RunningCase {
                     case_id: c.case_id,
                     progress: c.progress,
@@ -301,5 +309,388 @@ impl From<&SweepDetail> for SweepEvent {
                 })
                 .collect(),
         }
+    }
+}
+
+/// One event of a sweep's stream ([`crate::core::Core::events`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SweepUpdate {
+    /// The sweep changed.
+    Progress(SweepEvent),
+    /// The sweep is finished or cancelled: the stream's last event.
+    Done(SweepEvent),
+}
+
+impl SweepUpdate {
+    /// The server-sent event's name: `progress` or `done`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Progress(_) => "progress",
+            Self::Done(_) => "done",
+        }
+    }
+
+    pub fn event(&self) -> &SweepEvent {
+        match self {
+            Self::Progress(e) | Self::Done(e) => e,
+        }
+    }
+}
+
+impl From<&Progress> for CaseProgress {
+    fn from(p: &Progress) -> Self {
+        Self {
+            fraction: p.fraction,
+            l_k_bar: p.l_k_bar,
+            h_bar: p.h_bar,
+            steps: p.steps,
+        }
+    }
+}
+
+/// The solver's progress of a running case; none once it has stopped running
+/// (a finished case's last heartbeat is not its progress).
+fn progress_of(c: &CaseRecord) -> Option<CaseProgress> {
+    if c.state != CaseState::Running {
+        return None;
+    }
+    c.progress_detail.as_ref().map(CaseProgress::from)
+}
+
+fn links(id: i64) -> BTreeMap<String, String> {
+    BTreeMap::from([
+        ("self".to_string(), format!("/api/sweeps/{id}")),
+        (
+            "phase_diagram".to_string(),
+            format!("/api/sweeps/{id}/phase-diagram"),
+        ),
+        ("events".to_string(), format!("/api/sweeps/{id}/events")),
+        ("cases".to_string(), format!("/api/sweeps/{id}/cases")),
+    ])
+}
+
+fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
+    let open = |w: &str| counts.get(w).copied().unwrap_or(0);
+    let (queued, running) = (
+        open(CaseState::Queued.as_str()),
+        open(CaseState::Running.as_str()),
+    );
+    match state {
+        SweepState::Cancelled => SweepStatus::Cancelled,
+        _ if queued + running == 0 => SweepStatus::Done,
+        SweepState::Paused => SweepStatus::Paused,
+        SweepState::Active if running == 0 && counts.values().sum::<i64>() == queued => SweepStatus::Queued,
+        SweepState::Active => SweepStatus::Running,
+    }
+}
+
+/// A sweep and its cases per status word.
+impl From<(&SweepRecord, BTreeMap<String, i64>)> for SweepSummary {
+    fn from((s, counts): (&SweepRecord, BTreeMap<String, i64>)) -> Self {
+        Self {
+            id: s.id,
+            name: s.name.clone(),
+            preset: s.preset.clone(),
+            state: s.state.as_str().to_string(),
+            status: status_of(s.state, &counts),
+            total: counts.values().sum(),
+            counts,
+            created_at: s.created_at,
+            links: links(s.id),
+        }
+    }
+}
+
+/// Why a case has no inversion point (None when it has one).
+fn reason_of(c: &CaseRecord) -> Option<String> {
+    match (&c.result, c.state) {
+        (Some(r), _) if r.inversion.is_some() => None,
+        (Some(r), _) if r.outcome == "completed" => Some(match c.params.max_force_bar {
+            Some(f) => format!(
+                "no inversion detected before the case stopped (at l_k bar {} or F bar {f})",
+                c.params.min_l_k_bar
+            ),
+            None => format!(
+                "no inversion detected before the case stopped (at l_k bar {})",
+                c.params.min_l_k_bar
+            ),
+        }),
+        (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
+        (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
+        (None, CaseState::Cancelled) => Some(CaseState::Cancelled.as_str().to_string()),
+        (None, CaseState::Queued) => Some(match &c.last_error {
+            Some(e) => format!("not computed yet (queued; last attempt: {e})"),
+            None => "not computed yet (queued)".to_string(),
+        }),
+        (None, CaseState::Running) => Some("not computed yet (running)".to_string()),
+        (None, CaseState::Done) => Some("result missing".to_string()),
+    }
+}
+
+/// A sweep's case with the values of the sweep's varied parameters.
+impl From<(&SweepCase, &[String])> for SweepCaseView {
+    fn from((s, varied): (&SweepCase, &[String])) -> Self {
+        let c = &s.case;
+        let params = serde_json::to_value(&c.params).expect("params serialise");
+        Self {
+            case_id: c.id,
+            position: s.position,
+            params: varied
+                .iter()
+                .map(|name| (name.clone(), params.get(name).cloned().unwrap_or(Value::Null)))
+                .collect(),
+            status: c.status().to_string(),
+            cached: s.cached,
+            attempts: c.attempts,
+            progress: if c.state == CaseState::Done {
+                1.0
+            } else {
+                c.progress
+            },
+            progress_detail: progress_of(c),
+            inversion: c
+                .result
+                .as_ref()
+                .and_then(|r| r.inversion.as_ref())
+                .map(InversionPoint::from),
+            reason: reason_of(c),
+            wall_time: c.result.as_ref().map(|r| r.wall_time),
+        }
+    }
+}
+
+/// A sweep with its cases: counts, progress, ETA.
+impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
+    fn from((record, cases): (&SweepRecord, &[SweepCase])) -> Self {
+        let mut counts: BTreeMap<String, i64> = BTreeMap::new();
+        for c in cases {
+            *counts.entry(c.case.status().to_string()).or_default() += 1;
+        }
+        let total = cases.len().max(1) as f64;
+        let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
+        let running_done: f64 = cases
+            .iter()
+            .filter(|c| c.case.state == CaseState::Running)
+            .map(|c| c.case.progress)
+            .sum();
+        let summary = SweepSummary::from((record, counts));
+        let eta_seconds = match summary.status {
+            SweepStatus::Running | SweepStatus::Queued => eta(cases),
+            _ => None,
+        };
+        Self {
+            varied: record.varied.clone(),
+            spec: record.spec.clone(),
+            progress: ((finished + running_done) / total).clamp(0.0, 1.0),
+            eta_seconds,
+            cached: cases.iter().filter(|c| c.cached).count() as i64,
+            cases: cases
+                .iter()
+                .map(|c| SweepCaseView::from((c, &record.varied[..])))
+                .collect(),
+            summary,
+        }
+    }
+}
+
+/// Seconds left: the remaining work (queued cases and running remainders)
+/// times the mean case duration (from the sweep's results, else from the
+/// running cases' speed), over the cases running in parallel; none while
+/// nothing runs.
+fn eta(cases: &[SweepCase]) -> Option<f64> {
+    let running: Vec<&CaseRecord> = cases
+        .iter()
+        .map(|c| &c.case)
+        .filter(|c| c.state == CaseState::Running)
+        .collect();
+    if running.is_empty() {
+        return None;
+    }
+    let durations: Vec<f64> = cases
+        .iter()
+        .filter(|c| !c.cached)
+        .filter_map(|c| c.case.result.as_ref().map(|r| r.wall_time))
+        .collect();
+    let now = knotsweep_worker::store::now_ms();
+    let mean = if durations.is_empty() {
+        let speeds: Vec<f64> = running
+            .iter()
+            .filter(|c| c.progress > 0.02)
+            .filter_map(|c| c.started_at.map(|t| (now - t) as f64 / 1000.0 / c.progress))
+            .collect();
+        (!speeds.is_empty()).then(|| speeds.iter().sum::<f64>() / speeds.len() as f64)
+    } else {
+        Some(durations.iter().sum::<f64>() / durations.len() as f64)
+    }?;
+    let queued = cases.iter().filter(|c| c.case.state == CaseState::Queued).count() as f64;
+    let running_done: f64 = running.iter().map(|c| c.progress).sum();
+    let remaining = queued + running.len() as f64 - running_done;
+    Some(remaining * mean / running.len() as f64)
+}
+
+impl From<&ResultSummary> for ResultView {
+    fn from(r: &ResultSummary) -> Self {
+        Self {
+            outcome: r.outcome.clone(),
+            reason: r.reason.clone(),
+            inversion: r.inversion.as_ref().map(InversionPoint::from),
+            summary: r.summary.clone(),
+            wall_time: r.wall_time,
+            worker: r.worker.clone(),
+            created_at: r.created_at,
+        }
+    }
+}
+
+impl From<LogLine> for LogLineView {
+    fn from(l: LogLine) -> Self {
+        Self {
+            at: l.at,
+            level: l.level,
+            message: l.message,
+        }
+    }
+}
+
+impl CaseDetail {
+    /// A case with the sweeps that asked for it, its stored series (if any)
+    /// and its log lines.
+    pub fn new(c: &CaseRecord, sweeps: Vec<i64>, series: Option<Value>, logs: Vec<LogLine>) -> Self {
+        let id = c.id;
+        let links = BTreeMap::from([
+            ("self".to_string(), format!("/api/cases/{id}")),
+            ("series_csv".to_string(), format!("/api/cases/{id}/series.csv")),
+            ("frames".to_string(), format!("/api/cases/{id}/frames")),
+        ]);
+        Self {
+            id,
+            key: c.key.clone(),
+            solver_version: c.solver_version.clone(),
+            params: serde_json::to_value(&c.params).expect("params serialise"),
+            status: c.status().to_string(),
+            state: c.state.as_str().to_string(),
+            attempts: c.attempts,
+            max_attempts: c.max_attempts,
+            progress: c.progress,
+            progress_detail: progress_of(c),
+            lease_owner: c.lease_owner.clone(),
+            lease_expires_at: c.lease_expires_at,
+            last_error: c.last_error.clone(),
+            created_at: c.created_at,
+            started_at: c.started_at,
+            finished_at: c.finished_at,
+            sweeps,
+            result: c.result.as_ref().map(ResultView::from),
+            series,
+            logs: logs.into_iter().map(LogLineView::from).collect(),
+            links,
+        }
+    }
+}
+
+impl PhaseDiagram {
+    /// The phase diagram of a sweep: `base` its full base parameters,
+    /// `simplified` the simplified model's snap for each case (grid order).
+    pub fn new(record: &SweepRecord, cases: &[SweepCase], base: Value, simplified: Vec<Option<f64>>) -> Self {
+        let d = SweepDetail::from((record, cases));
+        Self {
+            sweep_id: record.id,
+            name: record.name.clone(),
+            preset: record.preset.clone(),
+            status: d.summary.status,
+            complete: cases.iter().all(|c| c.case.state.is_terminal()),
+            varied: record.varied.clone(),
+            base,
+            solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
+            physics_revision: solver::case::PHYSICS_REVISION,
+            points: d
+                .cases
+                .into_iter()
+                .zip(simplified)
+                .map(|(c, simplified_l_k_bar)| PhasePoint {
+                    case_id: c.case_id,
+                    params: c.params,
+                    status: c.status,
+                    inversion: c.inversion,
+                    reason: c.reason,
+                    simplified_l_k_bar,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Status words of cases, in the order metrics list them: the queue states
+/// before a result, the solver's outcomes, then the queue's failures.
+fn status_words() -> Vec<String> {
+    let queue = |s: CaseState| s.as_str().to_string();
+    let outcomes = Status::ALL
+        .into_iter()
+        .filter(|s| *s != Status::Cancelled)
+        .map(|s| s.to_string());
+    [queue(CaseState::Queued), queue(CaseState::Running)]
+        .into_iter()
+        .chain(outcomes)
+        .chain([queue(CaseState::Failed), queue(CaseState::Cancelled)])
+        .collect()
+}
+
+/// What `/metrics` reports besides the embedded workers' own counters.
+pub struct Metrics {
+    /// Cases per status word, across every process.
+    pub cases: BTreeMap<String, i64>,
+    /// Queued cases of active sweeps.
+    pub queue_depth: i64,
+    /// Sweeps per status.
+    pub sweeps: BTreeMap<SweepStatus, usize>,
+    /// Embedded worker slots.
+    pub workers: usize,
+}
+
+impl Metrics {
+    /// Prometheus text exposition.
+    pub fn render(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_cases Cases by status.\n# TYPE knotsweep_cases gauge"
+        );
+        for word in status_words() {
+            let _ = writeln!(
+                out,
+                "knotsweep_cases{{status=\"{word}\"}} {}",
+                self.cases.get(&word).copied().unwrap_or(0)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_queue_depth Queued cases of active sweeps.\n# TYPE knotsweep_queue_depth gauge\nknotsweep_queue_depth {}",
+            self.queue_depth
+        );
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_sweeps Sweeps by status (as GET /api/sweeps reports it: a sweep whose cases all finished is done).\n# TYPE knotsweep_sweeps gauge"
+        );
+        for status in [
+            SweepStatus::Queued,
+            SweepStatus::Running,
+            SweepStatus::Paused,
+            SweepStatus::Done,
+            SweepStatus::Cancelled,
+        ] {
+            let n = self.sweeps.get(&status).copied().unwrap_or(0);
+            let word = serde_json::to_value(status).expect("status serialises");
+            let _ = writeln!(
+                out,
+                "knotsweep_sweeps{{status=\"{}\"}} {n}",
+                word.as_str().unwrap_or_default()
+            );
+        }
+        let _ = writeln!(
+            out,
+            "# HELP knotsweep_workers Embedded worker slots.\n# TYPE knotsweep_workers gauge\nknotsweep_workers {}",
+            self.workers
+        );
+        out
     }
 }

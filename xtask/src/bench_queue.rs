@@ -1,4 +1,4 @@
-//! `knotsweep bench-queue`: throughput of the queue itself. Enqueues no-op
+//! `xtask bench-queue`: throughput of the queue itself. Enqueues no-op
 //! cases and lets W concurrent claimers claim and complete them (no solver),
 //! for each W given; prints claim+complete per second and the queue's
 //! overhead per case against a real case's time. BENCHMARKS.md records it.

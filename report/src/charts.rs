@@ -1,10 +1,10 @@
-//! Publication-style SVG figures (plotters' SVG backend, no fonts needed): the
-//! same F bar and H bar charts for `knotsweep run --plot`, the sweep API and
-//! the web page's downloads.
-pub mod simplified;
-
+//! Publication-style SVG charts (plotters' SVG backend, no fonts needed): the
+//! same F bar and H bar charts for `knotsweep run --plot`, `knotsweep
+//! reproduce`, the sweep API and the web page's downloads, and the API's phase
+//! diagram.
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
+use solver::case::CaseParams;
 use solver::measurements::Sample;
 
 /// What a tightening chart plots against l_k bar (paper Fig. 5 a, b).
@@ -64,6 +64,23 @@ pub fn tightening_chart(title: &str, quantity: Quantity, cases: &[CaseCurve]) ->
         &curves,
         &markers,
     )
+}
+
+/// One case's F bar or H bar chart, titled with its n, h and mu: the figure
+/// of `knotsweep run --plot` and of `GET /api/cases/{id}/figures/*.svg`.
+pub fn case_chart(
+    params: &CaseParams,
+    series: &[Sample],
+    inversion: Option<f64>,
+    quantity: Quantity,
+) -> Result<String> {
+    let label = format!("n = {}, h = {} mm, mu = {}", params.n, params.h * 1e3, params.mu);
+    let curve = CaseCurve {
+        label: label.clone(),
+        series,
+        inversion,
+    };
+    tightening_chart(&label, quantity, &[curve])
 }
 
 /// One curve of a chart.
@@ -132,12 +149,7 @@ pub fn line_chart(
                 .map_err(|e| anyhow!("{e}"))?;
         }
         if curves.len() > 1 {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| anyhow!("{e}"))?;
+            legend(&mut chart)?;
         }
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
@@ -195,13 +207,20 @@ pub fn phase_chart(
                 .label("simplified model (Sec. 5)")
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| anyhow!("{e}"))?;
+        legend(&mut chart)?;
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     Ok(svg)
+}
+
+/// The boxed legend of a chart's labelled series.
+fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| anyhow!("{e}"))
 }

@@ -1,22 +1,21 @@
 //! `docs/SIMPLIFIED_MODEL.md`: the simplified model's results (paper Sec. 5,
 //! `solver::simplified::reproduce`) as markdown and the SVG figures it links
-//! (`knotsweep_server::figures::simplified`); `knotsweep simplified doc` writes them.
-use knotsweep_server::figures::simplified as svg;
-use serde::{Deserialize, Serialize};
+//! ([`crate::simplified`]); `knotsweep simplified doc` writes them.
+use crate::simplified as svg;
 use solver::simplified::reproduce::{Reproduction, SweepRow};
 use solver::simplified::{BifurcationSpec, Params};
 use std::fmt::Write;
 
 /// A generated document: markdown and the SVG figures it links (relative to
 /// the markdown file, under `simplified/`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Document {
     pub markdown: String,
     pub figures: Vec<Figure>,
 }
 
 /// One SVG figure: file name (in the `simplified/` folder next to the document) and content.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Figure {
     pub file_name: String,
     pub svg: String,

@@ -1,4 +1,4 @@
-//! `knotsweep bench-soak`: the service under a sustained mixed load, on
+//! `xtask bench-soak`: the service under a sustained mixed load, on
 //! loopback only. A `knotsweep serve` child process (no embedded workers) on a
 //! scratch SQLite file; `--clients` researchers, each replaying
 //! `--minutes` of use without think time (a sweep submitted every 3 minutes,
@@ -16,12 +16,18 @@ use rand::{Rng, SeedableRng};
 use serde_json::{Value, json};
 use solver::protocol::{CaseReport, Status};
 use std::collections::{BTreeMap, HashSet};
+use std::io::Write;
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-#[derive(clap::Args)]
+#[derive(clap::Parser)]
 pub struct Args {
+    /// The `knotsweep` binary to serve [default: the one next to this
+    /// program, e.g. `target/release/knotsweep` after `cargo build --release`].
+    #[arg(long)]
+    knotsweep: Option<PathBuf>,
     /// Concurrent clients.
     #[arg(long, default_value_t = 50)]
     clients: usize,
@@ -53,23 +59,39 @@ struct Submitted {
     cancelled: bool,
 }
 
-pub fn run(args: Args) -> Result<()> {
+/// Runs the soak and writes its report to `out`.
+pub fn run(args: Args, out: &mut dyn Write) -> Result<()> {
     ensure!(
         args.clients > 0 && args.minutes > 0,
         "--clients and --minutes must be positive"
     );
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
-    runtime.block_on(soak(args))
+    runtime.block_on(soak(args, out))
 }
 
-async fn soak(args: Args) -> Result<()> {
+/// The `knotsweep` binary: `--knotsweep`, else the one next to this program.
+fn server_binary(args: &Args) -> Result<PathBuf> {
+    let path = match &args.knotsweep {
+        Some(path) => path.clone(),
+        None => std::env::current_exe()?.with_file_name(format!("knotsweep{}", std::env::consts::EXE_SUFFIX)),
+    };
+    ensure!(
+        path.is_file(),
+        "no knotsweep binary at {}: build it with the same profile (`cargo build --release`) or give --knotsweep",
+        path.display()
+    );
+    Ok(path)
+}
+
+async fn soak(args: Args, out: &mut dyn Write) -> Result<()> {
+    let binary = server_binary(&args)?;
     let dir = tempfile::tempdir()?;
     let url = format!("sqlite://{}", dir.path().join("soak.sqlite").display());
     let addr = {
         let probe = std::net::TcpListener::bind("127.0.0.1:0")?;
         probe.local_addr()?
     };
-    let mut server = std::process::Command::new(std::env::current_exe()?)
+    let mut server = std::process::Command::new(&binary)
         .args([
             "serve",
             "--workers",
@@ -86,7 +108,7 @@ async fn soak(args: Args) -> Result<()> {
         .context("starting the server")?;
     let base = format!("http://{addr}");
     let http = reqwest::Client::new();
-    let result = drive(&args, &url, &base, &http, server.id()).await;
+    let result = drive(&args, &url, &base, &http, server.id(), out).await;
     let _ = server.kill();
     let _ = server.wait();
     if result.is_err() {
@@ -96,7 +118,14 @@ async fn soak(args: Args) -> Result<()> {
     result
 }
 
-async fn drive(args: &Args, url: &str, base: &str, http: &reqwest::Client, pid: u32) -> Result<()> {
+async fn drive(
+    args: &Args,
+    url: &str,
+    base: &str,
+    http: &reqwest::Client,
+    pid: u32,
+    out: &mut dyn Write,
+) -> Result<()> {
     wait_until_up(http, base).await?;
     let store = open_store(url, StoreOptions::default()).await?;
     let rss = Arc::new(std::sync::Mutex::new(Vec::<(f64, u64)>::new()));
@@ -145,7 +174,7 @@ async fn drive(args: &Args, url: &str, base: &str, http: &reqwest::Client, pid: 
     sampler.await?;
     check(http, base, &*store, &submitted, completed.load(Ordering::Relaxed)).await?;
     let rss = rss.lock().expect("sampler finished").clone();
-    report(args, &latencies, load_secs, &rss, &submitted)?;
+    report(args, &latencies, load_secs, &rss, &submitted, out)?;
     store.close().await;
     Ok(())
 }
@@ -376,10 +405,18 @@ fn rss_kib(pid: u32) -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
-fn report(args: &Args, lat: &Latencies, secs: f64, rss: &[(f64, u64)], subs: &[Submitted]) -> Result<()> {
+fn report(
+    args: &Args,
+    lat: &Latencies,
+    secs: f64,
+    rss: &[(f64, u64)],
+    subs: &[Submitted],
+    out: &mut dyn Write,
+) -> Result<()> {
     let total: usize = lat.values().map(Vec::len).sum();
     let all: Vec<u64> = lat.values().flatten().copied().collect();
-    println!(
+    writeln!(
+        out,
         "soak: {} clients x {} minutes, {} stand-in workers ({} ms per case), {} sweeps ({} cancelled)",
         args.clients,
         args.minutes,
@@ -387,39 +424,42 @@ fn report(args: &Args, lat: &Latencies, secs: f64, rss: &[(f64, u64)], subs: &[S
         args.case_ms,
         subs.len(),
         subs.iter().filter(|s| s.cancelled).count()
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "{total} requests in {secs:.1} s: {:.0} requests/s",
         total as f64 / secs
-    );
-    println!("| request | count | p50 (ms) | p99 (ms) | max (ms) |");
-    println!("|---|---|---|---|---|");
+    )?;
+    writeln!(out, "| request | count | p50 (ms) | p99 (ms) | max (ms) |")?;
+    writeln!(out, "|---|---|---|---|---|")?;
     for (kind, v) in lat.iter().chain(std::iter::once((&"all", &all))) {
         let (p50, p99, max) = percentiles(v);
-        println!("| {kind} | {} | {p50:.1} | {p99:.1} | {max:.1} |", v.len());
+        writeln!(out, "| {kind} | {} | {p50:.1} | {p99:.1} | {max:.1} |", v.len())?;
     }
     ensure!(rss.len() >= 2, "too few RSS samples ({})", rss.len());
     let half = rss.len() / 2;
     let peak = |s: &[(f64, u64)]| s.iter().map(|&(_, kb)| kb).max().unwrap_or(0);
     let (first, second) = (peak(&rss[..half]), peak(&rss[half..]));
-    println!(
+    writeln!(
+        out,
         "server RSS: {:.1} MiB at start, peak {:.1} MiB over the first half of the run, {:.1} MiB over the second, {:.1} MiB at the end",
         rss[0].1 as f64 / 1024.0,
         first as f64 / 1024.0,
         second as f64 / 1024.0,
         rss[rss.len() - 1].1 as f64 / 1024.0
-    );
+    )?;
     if args.no_memory_check {
-        println!("no accepted sweep or case lost or duplicated");
+        writeln!(out, "no accepted sweep or case lost or duplicated")?;
         return Ok(());
     }
     ensure!(
         second as f64 <= 1.1 * first as f64,
         "server memory kept growing: peak {second} KiB in the second half against {first} KiB in the first"
     );
-    println!(
+    writeln!(
+        out,
         "no accepted sweep or case lost or duplicated; memory levelled off (second-half peak within 10 % of the first)"
-    );
+    )?;
     Ok(())
 }
 

@@ -1,0 +1,13 @@
+//! knotsweep's presentation, one home for every figure and document the CLI
+//! and the service write (pure string building from the solver's results, no
+//! I/O):
+//! - [`charts`]: F bar and H bar against l_k bar, phase diagrams (plotters);
+//! - [`simplified`]: the simplified model's drawings (paper Sec. 5, Figs 12-15);
+//! - [`snapshot`]: side views of the knot framed as the paper's Fig. 1;
+//! - [`simplified_doc`] and [`validation`]: `docs/SIMPLIFIED_MODEL.md` and
+//!   `docs/VALIDATION.md` with the figures they link.
+pub mod charts;
+pub mod simplified;
+pub mod simplified_doc;
+pub mod snapshot;
+pub mod validation;

@@ -324,29 +324,27 @@ async fn finished_cases_carry_no_stale_progress_and_done_sweeps_no_eta() {
     server.shutdown().await.unwrap();
 }
 
-/// The soak benchmark, shortened: 10 clients replaying 6 minutes of submits,
-/// polls and cancels against stand-in workers lose and duplicate no sweep or
-/// case (the full run, with its memory check, is in BENCHMARKS.md).
+/// The soak benchmark (`xtask bench-soak`), shortened: 10 clients replaying
+/// 6 minutes of submits, polls and cancels against stand-in workers lose and
+/// duplicate no sweep or case (the full run, with its memory check, is in
+/// BENCHMARKS.md).
 #[test]
 fn a_short_soak_loses_and_duplicates_nothing() {
-    let out = Command::new(BIN)
-        .args([
-            "bench-soak",
-            "--clients",
-            "10",
-            "--minutes",
-            "6",
-            "--no-memory-check",
-        ])
-        .env("RUST_LOG", "error")
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    use clap::Parser;
+    let args = xtask::bench_soak::Args::parse_from([
+        "bench-soak",
+        "--knotsweep",
+        BIN,
+        "--clients",
+        "10",
+        "--minutes",
+        "6",
+        "--no-memory-check",
+    ]);
+    let mut out = Vec::new();
+    let result = xtask::bench_soak::run(args, &mut out);
+    let stdout = String::from_utf8_lossy(&out);
+    assert!(result.is_ok(), "{stdout}\n{result:?}");
     assert!(stdout.contains("20 sweeps (4 cancelled)"), "{stdout}");
     assert!(
         stdout.contains("no accepted sweep or case lost or duplicated"),

@@ -169,10 +169,10 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         p["h"].as_f64().unwrap() * 1e3,
         p["mu"]
     );
-    let expected = knotsweep_server::figures::tightening_chart(
+    let expected = report::charts::tightening_chart(
         &label,
-        knotsweep_server::figures::Quantity::FBar,
-        &[knotsweep_server::figures::CaseCurve {
+        report::charts::Quantity::FBar,
+        &[report::charts::CaseCurve {
             label: label.clone(),
             series: &samples,
             inversion: case["result"]["inversion"]["l_k_bar"].as_f64(),

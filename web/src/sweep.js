@@ -126,7 +126,12 @@ async function refresh(state) {
     });
     const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
     const held = inverted.filter(rising).map((p) => `${axisName} = ${p.params[axisName]} (F bar × ${fmt(p.inversion.F_bar_after / p.inversion.F_bar_before, 3)}, kinetic energy × ${fmt(p.inversion.kinetic_energy_ratio, 1)})`);
+    // Fig. 11's axis: what the model gives there (docs/FIDELITY.md).
+    const friction = axisName === "mu"
+      ? "Paper Fig. 11: the loop inverts earlier, at a larger l_k bar, as mu grows. The default model (friction at the centre lines, the paper's start twist) gives that trend with a clean snap at every mu; with rolling = true the high-friction points lose their snap (docs/FIDELITY.md)."
+      : "";
     $("#phase-note").textContent = [
+      friction,
       none.length ? "Without an inversion: " + none.join("; ") + "." : "",
       held.length ? "F bar does not fall through the event at " + held.join("; ") +
         ". A kinetic energy tens of times its median marks a snap; 5-10 times marks a loop lying down while the pull keeps loading it (docs/FIDELITY.md)." : "",

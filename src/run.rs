@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use report::charts::{Quantity, case_chart};
 use serde_json::Value;
-use solver::case::{CaseParams, PARAMETERS, Parameter};
+use solver::case::{CaseParams, PARAMETERS, Parameter, ValidCase};
 use solver::protocol::{self, CaseReport, Status};
 use std::path::PathBuf;
 
@@ -167,16 +167,13 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let params = args.params.params()?;
-    if let Err(errors) = params.validate() {
-        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-        anyhow::bail!("invalid parameters: {}", text.join("; "));
-    }
+    let case = validated(&params)?;
     tracing::info!(n = params.n, h = params.h, mu = params.mu, "running case");
     let bar = ProgressBar::new(1000).with_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
             .expect("valid template"),
     );
-    let report = protocol::run(&params, &mut |p| {
+    let report = protocol::run_valid(&case, &mut |p| {
         bar.set_position((p.fraction * 1000.0) as u64);
         bar.set_message(format!("l_k bar {:.1}  H bar {:.2}", p.l_k_bar, p.h_bar));
         true
@@ -196,6 +193,14 @@ pub fn run(args: Args) -> Result<()> {
         anyhow::bail!("case ended with status {}: {}", report.status, report.reason);
     }
     Ok(())
+}
+
+/// The case to run, or every parameter error in one message.
+pub fn validated(params: &CaseParams) -> Result<ValidCase> {
+    params.validated().map_err(|errors| {
+        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+        anyhow::anyhow!("invalid parameters: {}", text.join("; "))
+    })
 }
 
 /// F bar and H bar against l_k bar, with the inversion marked.

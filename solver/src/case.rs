@@ -1,11 +1,8 @@
 //! The one definition of a knot case's parameters, with the paper's defaults,
 //! shared by the CLI, the API, the queue and the solver. SI units.
-use crate::contact::broad_phase::neighbour_gap;
-use crate::contact::segment::closest_points;
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
-use crate::knot::{self, KnotError, KnotShape, KnotSpec};
-pub use crate::protocol::Protocol;
-use nalgebra::Vector3;
+use crate::knot::{self, KnotError, KnotSpec, StartShape};
+use crate::words::serde_word;
 use serde::{Deserialize, Serialize};
 
 /// Revision of the physics: raised whenever a change to the model or its
@@ -109,7 +106,7 @@ pub struct CaseParams {
     pub max_force_bar: Option<f64>,
     /// Start from these K = `nodes` points (m) instead of the builder's knot:
     /// the ends are clamped where they are and pulled apart along the line
-    /// joining them. Checked like a built knot ([`CaseParams::validated_start`]).
+    /// joining them. Checked like a built knot ([`knot::checked_start`]).
     pub initial_shape: Option<Vec<[f64; 3]>>,
 }
 
@@ -149,6 +146,38 @@ impl Default for CaseParams {
     }
 }
 
+/// How fast the clamps move along the pull (case parameter `protocol`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Protocol {
+    /// The whole pull at `pull_speed` (the paper's protocol).
+    #[default]
+    Reference,
+    /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
+    /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
+    /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
+    /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
+    /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
+    /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
+    /// times the case's), and pulls through the snap at `pull_speed`
+    /// (`SNAP_FACTOR`) with the case's damping and step, fast again from
+    /// `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the restart means
+    /// the restart was past the fold: it is redone from `RESTART_BEFORE`
+    /// further back. A snap stage that finds no snap within `FALSE_ALARM`
+    /// approaches fast again; a fast approach that reaches the end of the
+    /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
+    /// whole pull is the reference's. The report's `stages` list what ran.
+    /// Its inversion lies within 1 % of the reference's, but the fast
+    /// approach reads F bar 5-20 % high (BENCHMARKS.md, "Pull protocols").
+    Adaptive,
+}
+
+impl std::fmt::Display for Protocol {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        serde_word(self, f)
+    }
+}
+
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;
 /// h >= L / this: with edges of at most 4h ([`knot::build`]) and at most
@@ -164,12 +193,23 @@ pub const REFERENCE_DT: f64 = 5e-4;
 /// The paper's edge length (m): L = 1 m with K = 301 nodes.
 pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;
 
-/// The shape a case starts from.
+/// A case whose parameters passed [`CaseParams::validated`], with the start
+/// shape that validation built, so that running it builds no knot again.
 #[derive(Clone, Debug, PartialEq)]
-pub struct StartShape {
-    pub points: Vec<Vector3<f64>>,
-    /// A node in the middle of the knot's loop (where the braid search starts).
-    pub loop_middle: usize,
+pub struct ValidCase {
+    params: CaseParams,
+    start: StartShape,
+}
+
+impl ValidCase {
+    pub fn params(&self) -> &CaseParams {
+        &self.params
+    }
+
+    /// The shape the case starts from: `initial_shape` or the builder's knot.
+    pub fn start(&self) -> &StartShape {
+        &self.start
+    }
 }
 
 /// One case parameter: its name (the JSON key; the CLI flag is `--` and the
@@ -318,7 +358,7 @@ pub struct ParamError {
 
 impl CaseParams {
     /// Checks every documented range and that the case can start
-    /// ([`CaseParams::validated_start`]); returns all violations.
+    /// ([`CaseParams::validated`]); returns all violations.
     pub fn validate(&self) -> Result<(), Vec<ParamError>> {
         self.validate_in(&mut BuildChecks::default())
     }
@@ -346,14 +386,18 @@ impl CaseParams {
         outcome.map_or(Ok(()), |e| Err(vec![e]))
     }
 
-    /// The shape the case starts from, once every range holds: the checks of
-    /// [`CaseParams::validate`] and the start shape in one pass.
-    pub fn validated_start(&self) -> Result<StartShape, Vec<ParamError>> {
+    /// The checks of [`CaseParams::validate`] and the start shape in one
+    /// pass: the case to run.
+    pub fn validated(&self) -> Result<ValidCase, Vec<ParamError>> {
         let errors = self.range_errors();
         if !errors.is_empty() {
             return Err(errors);
         }
-        self.start_shape().map_err(|e| vec![e])
+        let start = self.start_shape().map_err(|e| vec![e])?;
+        Ok(ValidCase {
+            params: self.clone(),
+            start,
+        })
     }
 
     /// Every documented range that does not hold.
@@ -515,89 +559,17 @@ impl CaseParams {
         }
     }
 
-    /// The shape the case starts from: `initial_shape`, checked, or the
-    /// knot builder's ([`knot::build`] itself, so that a case accepted by
-    /// [`CaseParams::validate`] can always start); a failure names the
-    /// parameter to change.
+    /// The shape the case starts from: `initial_shape`, checked
+    /// ([`knot::checked_start`]), or the knot builder's ([`knot::build`]
+    /// itself, so that a case accepted by [`CaseParams::validate`] can always
+    /// start); a failure names the parameter to change.
     fn start_shape(&self) -> Result<StartShape, ParamError> {
         match &self.initial_shape {
-            Some(points) => self.check_initial_shape(points),
-            None => knot::build(&self.knot_spec())
-                .map(|shape: KnotShape| StartShape {
-                    loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
-                    points: shape.points,
-                })
-                .map_err(|e| self.knot_error(e)),
-        }
-    }
-
-    /// A user's start shape: `nodes` finite points, a polyline of length
-    /// `length` (within 1 %), every node between the two ends along the line
-    /// joining them (the clamps hold the ends), no two non-neighbouring
-    /// segments closer than 2h, and the knot type of an n-pass overhand knot.
-    fn check_initial_shape(&self, points: &[[f64; 3]]) -> Result<StartShape, ParamError> {
-        let fail = |reason: String| ParamError {
-            field: "initial_shape".to_string(),
-            reason,
-        };
-        if points.len() != self.nodes {
-            return Err(fail(format!(
-                "{} points, but nodes = {}: give one point per node",
-                points.len(),
-                self.nodes
-            )));
-        }
-        if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
-            return Err(fail(format!("point {i} is not finite")));
-        }
-        let points: Vec<Vector3<f64>> = points.iter().map(|p| Vector3::from(*p)).collect();
-        let edges: Vec<f64> = points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
-        if let Some(i) = edges.iter().position(|&e| e <= 0.0) {
-            return Err(fail(format!("points {i} and {} coincide", i + 1)));
-        }
-        let total: f64 = edges.iter().sum();
-        if (total - self.length).abs() > 0.01 * self.length {
-            return Err(fail(format!(
-                "the polyline is {total:.4} m long, but length = {} m (within 1 %)",
-                self.length
-            )));
-        }
-        let (first, last) = (points[0], points[points.len() - 1]);
-        let span = (last - first).norm();
-        let axis = (last - first) / span;
-        if let Some(i) = points.iter().position(|p| {
-            let s = (p - first).dot(&axis);
-            s < -1e-9 * span || s > span * (1.0 + 1e-9)
-        }) {
-            return Err(fail(format!(
-                "point {i} lies beyond an end along the line joining the ends: the clamps hold the \
-                 first and last points and pull them apart along that line"
-            )));
-        }
-        let shortest = edges.iter().cloned().fold(f64::INFINITY, f64::min);
-        let gap = neighbour_gap(2.0 * self.h, shortest);
-        for i in 0..edges.len() {
-            for j in i + gap + 1..edges.len() {
-                let d = closest_points(&points[i], &points[i + 1], &points[j], &points[j + 1]).distance;
-                if d < 2.0 * self.h * (1.0 - 1e-6) {
-                    return Err(fail(format!(
-                        "segments {i} and {j} are {d:.3e} m apart, closer than 2h = {:.3e} m",
-                        2.0 * self.h
-                    )));
-                }
-            }
-        }
-        let expected = knot::expected_determinant(self.n);
-        match knot::knot_determinant(&points) {
-            Ok(d) if d == expected => Ok(StartShape {
-                loop_middle: points.len() / 2,
-                points,
+            Some(points) => knot::checked_start(&self.knot_spec(), points).map_err(|reason| ParamError {
+                field: "initial_shape".to_string(),
+                reason,
             }),
-            Ok(d) => Err(fail(format!(
-                "knot determinant {d}, but an overhand knot with n = {} passes has {expected}",
-                self.n
-            ))),
-            Err(e) => Err(fail(format!("knot type undetermined: {e}"))),
+            None => knot::built_start(&self.knot_spec()).map_err(|e| self.knot_error(e)),
         }
     }
 

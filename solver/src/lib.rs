@@ -20,3 +20,4 @@ pub mod simplified;
 pub mod stepper;
 pub mod time_step;
 pub mod validation;
+mod words;

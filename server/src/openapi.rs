@@ -1,10 +1,11 @@
 //! Schemas the derive macros cannot produce: `CaseParams` lives in the solver
 //! crate (no utoipa there), so its schema is generated from its serialisation
-//! (every field, its JSON type and the paper's default) plus the descriptions
-//! of `solver::case::PARAMETERS` (the ranges are checked by
-//! `CaseParams::validate`, which is authoritative).
+//! (every field, its JSON type and the paper's default) plus the table
+//! `solver::case::PARAMETERS`: each field's description, its words and its
+//! bounds where they are fixed numbers (`CaseParams::validate` checks the
+//! same table and is authoritative).
 use serde_json::Value;
-use solver::case::{CaseParams, PARAMETERS};
+use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
 use utoipa::openapi::schema::{ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
 
@@ -17,15 +18,35 @@ fn param_schema(name: &str, default: &Value) -> Schema {
         Value::Array(_) => SchemaType::Type(Type::Array),
         _ => SchemaType::Type(Type::String),
     };
-    let doc = PARAMETERS
-        .iter()
-        .find(|p| p.name == name)
-        .map(|p| p.doc.to_string());
-    ObjectBuilder::new()
+    let object = ObjectBuilder::new()
         .schema_type(ty)
-        .description(doc)
-        .default(Some(default.clone()))
-        .into()
+        .default(Some(default.clone()));
+    match PARAMETERS.iter().find(|p| p.name == name) {
+        Some(p) => with_range(object.description(Some(p.description())), p),
+        None => object,
+    }
+    .into()
+}
+
+/// The schema's `enum`, `minimum` and `maximum` (or their exclusive forms)
+/// from the parameter's range, where the range is fixed.
+fn with_range(object: ObjectBuilder, p: &Parameter) -> ObjectBuilder {
+    match p.range {
+        Range::Words(words) => object.enum_values(Some(words.iter().copied())),
+        Range::Integers(lo, hi) => object.minimum(Some(lo as f64)).maximum(Some(hi as f64)),
+        Range::Interval(lo, hi) => {
+            let object = match lo {
+                Bound::Closed(x) => object.minimum(Some(x)),
+                Bound::Open(x) => object.exclusive_minimum(Some(x)),
+            };
+            match hi {
+                Bound::Closed(y) => object.maximum(Some(y)),
+                Bound::Open(y) if y.is_finite() => object.exclusive_maximum(Some(y)),
+                Bound::Open(_) => object,
+            }
+        }
+        _ => object,
+    }
 }
 
 /// The `CaseParams` object schema: every field with its type and default.

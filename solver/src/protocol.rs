@@ -270,7 +270,9 @@ pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> 
 
 /// [`run`] for a case already validated, from the start shape its validation built.
 pub fn run_valid(case: &ValidCase, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
-    run_from(case, std::time::Instant::now(), &mut |progress, _| observer(progress))
+    run_from(case, std::time::Instant::now(), &mut |progress, _| {
+        observer(progress)
+    })
 }
 
 /// [`run_valid`] with the rod's centre line (node positions) handed to the
@@ -301,7 +303,9 @@ fn run_from(
         }
     };
     let mut run = Case::new(params, report, world, started);
-    let ending = run.relax().and_then(|()| run.pull(case.start().loop_middle, observer));
+    let ending = run
+        .relax()
+        .and_then(|()| run.pull(case.start().loop_middle, observer));
     run.finish(ending.err().unwrap_or(Ending {
         status: Status::Completed,
         reason: String::new(),
@@ -310,7 +314,11 @@ fn run_from(
 
 /// Parameter errors as one line.
 fn reasons(errors: &[ParamError]) -> String {
-    errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("; ")
+    errors
+        .iter()
+        .map(|e| e.to_string())
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Why a case stopped before the end of its pull.

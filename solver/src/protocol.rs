@@ -256,6 +256,33 @@ const RELAX_DAMPING: f64 = 20.0;
 /// runs it ([`run_valid`]); invalid parameters give a report with
 /// [`Status::Invalid`] and the reasons. `observer` sees progress after every
 /// sample and returns `false` to cancel.
+///
+/// A short rod with one pass, pulled quickly until l_k bar falls below 130:
+/// ```
+/// use solver::case::CaseParams;
+/// use solver::protocol::{self, Status};
+///
+/// let params = CaseParams {
+///     n: 1,
+///     length: 0.3,
+///     nodes: 102,
+///     relax_time: 0.1,
+///     pull_speed: 0.01,
+///     min_l_k_bar: 130.0,
+///     ..CaseParams::default()
+/// };
+/// let mut samples = 0;
+/// let report = protocol::run(&params, &mut |_| {
+///     samples += 1;
+///     true
+/// });
+/// assert_eq!(report.status, Status::Completed, "{}", report.reason);
+/// assert_eq!(report.determinant_initial, Some(3), "a trefoil: 2n + 1");
+/// assert_eq!(report.series.len(), samples);
+/// let l_k_bar: Vec<f64> = report.series.iter().map(|s| s.l_k_bar).collect();
+/// assert!(l_k_bar.windows(2).all(|w| w[1] < w[0]), "the pull shortens the knot");
+/// assert!(l_k_bar[0] > 135.0 && l_k_bar[l_k_bar.len() - 1] < 130.0);
+/// ```
 pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
     let started = std::time::Instant::now();
     match params.validated() {

@@ -114,6 +114,16 @@ pub struct ParamError {
 impl CaseParams {
     /// Checks every documented range and that the case can start
     /// ([`CaseParams::validated`]); returns all violations.
+    ///
+    /// ```
+    /// use solver::case::CaseParams;
+    ///
+    /// assert!(CaseParams::default().validate().is_ok());
+    /// let errors = CaseParams { mu: -0.5, ..CaseParams::default() }.validate().unwrap_err();
+    /// assert_eq!(errors.len(), 1);
+    /// assert_eq!(errors[0].field, "mu");
+    /// assert_eq!(errors[0].reason, "must be in [0, 2], got -0.5");
+    /// ```
     pub fn validate(&self) -> Result<(), Vec<ParamError>> {
         self.validate_in(&mut BuildChecks::default())
     }

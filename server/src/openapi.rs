@@ -81,6 +81,21 @@ pub fn partial_case_params() -> RefOr<Schema> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
+
+    /// The table's words, bounds and texts reach the schema.
+    #[test]
+    fn the_table_reaches_the_schema() {
+        let schema = serde_json::to_value(case_params_schema()).unwrap();
+        let props = &schema["properties"];
+        assert_eq!(props["protocol"]["enum"], json!(["reference", "adaptive"]));
+        assert_eq!(props["mu"]["minimum"].as_f64(), Some(0.0));
+        assert_eq!(props["mu"]["maximum"].as_f64(), Some(2.0));
+        assert_eq!(props["max_force_bar"]["exclusiveMinimum"].as_f64(), Some(0.0));
+        assert!(props["max_force_bar"].get("exclusiveMaximum").is_none());
+        let h = props["h"]["description"].as_str().unwrap();
+        assert!(h.contains("Range: [L/16000, L/50) m."), "{h}");
+    }
 
     #[test]
     fn every_parameter_is_documented() {

@@ -5,8 +5,8 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use report::validation::{Job, PERTURBATION};
-use solver::case::{Candidates, CaseParams, FrictionLaw};
-use solver::protocol::{self, CaseReport, Protocol};
+use solver::case::{Candidates, CaseParams, FrictionLaw, Protocol};
+use solver::protocol::{self, CaseReport};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

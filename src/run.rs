@@ -4,23 +4,25 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use report::charts::{Quantity, case_chart};
 use serde_json::Value;
-use solver::case::{CaseParams, PARAMETERS, Parameter};
+use solver::case::{CaseParams, PARAMETERS, Parameter, Range, ValidCase};
 use solver::protocol::{self, CaseReport, Status};
 use std::path::PathBuf;
 
 /// Case parameters as flags, one per entry of `solver::case::PARAMETERS`
-/// (`--pull-speed` for `pull_speed`, its help the table's doc); a flag left out
-/// takes the paper's default (`CaseParams::default`).
+/// (`--pull-speed` for `pull_speed`, its help the entry's description); a
+/// flag left out takes the paper's default (`CaseParams::default`).
 #[derive(Clone, Debug, Default)]
 pub struct ParamFlags {
     /// The given flags as JSON values, by parameter name.
     given: serde_json::Map<String, Value>,
     /// `--initial-shape FILE`: the points are read from a file on the CLI.
-    initial_shape: Option<PathBuf>,
+    shape_file: Option<PathBuf>,
 }
 
-/// The parameter the CLI reads from a file.
-const SHAPE: &str = "initial_shape";
+/// Whether the CLI reads parameter `p` from a file: the start shape's points.
+fn from_file(p: &Parameter) -> bool {
+    p.range == Range::Points
+}
 
 impl clap::FromArgMatches for ParamFlags {
     fn from_arg_matches(matches: &clap::ArgMatches) -> Result<Self, clap::Error> {
@@ -31,8 +33,8 @@ impl clap::FromArgMatches for ParamFlags {
 
     fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
         for p in PARAMETERS {
-            if p.name == SHAPE {
-                self.initial_shape = matches.get_one::<PathBuf>(p.name).cloned();
+            if from_file(p) {
+                self.shape_file = matches.get_one::<PathBuf>(p.name).cloned();
             } else if let Some(v) = matches.get_one::<Value>(p.name) {
                 self.given.insert(p.name.to_string(), v.clone());
             }
@@ -55,7 +57,7 @@ impl clap::Args for ParamFlags {
 /// The flag of parameter `p`, parsed to the JSON type of its `default`.
 fn flag(p: &Parameter, default: &Value) -> clap::Arg {
     let arg = clap::Arg::new(p.name).long(p.name.replace('_', "-"));
-    if p.name == SHAPE {
+    if from_file(p) {
         return arg
             .value_name("FILE")
             .value_parser(clap::value_parser!(PathBuf))
@@ -65,7 +67,7 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
             );
     }
     let kind = default.clone();
-    arg.help(p.doc)
+    arg.help(p.description())
         .allow_negative_numbers(true)
         .value_parser(move |text: &str| parse(&kind, text))
 }
@@ -96,7 +98,7 @@ impl ParamFlags {
     /// The case parameters: the given flags over the paper's defaults.
     pub fn params(&self) -> Result<CaseParams> {
         let mut params: CaseParams = serde_json::from_value(Value::Object(self.given.clone()))?;
-        if let Some(path) = &self.initial_shape {
+        if let Some(path) = &self.shape_file {
             let text =
                 std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
             params.initial_shape =
@@ -167,16 +169,13 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let params = args.params.params()?;
-    if let Err(errors) = params.validate() {
-        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-        anyhow::bail!("invalid parameters: {}", text.join("; "));
-    }
+    let case = validated(&params)?;
     tracing::info!(n = params.n, h = params.h, mu = params.mu, "running case");
     let bar = ProgressBar::new(1000).with_style(
         ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
             .expect("valid template"),
     );
-    let report = protocol::run(&params, &mut |p| {
+    let report = protocol::run_valid(&case, &mut |p| {
         bar.set_position((p.fraction * 1000.0) as u64);
         bar.set_message(format!("l_k bar {:.1}  H bar {:.2}", p.l_k_bar, p.h_bar));
         true
@@ -196,6 +195,14 @@ pub fn run(args: Args) -> Result<()> {
         anyhow::bail!("case ended with status {}: {}", report.status, report.reason);
     }
     Ok(())
+}
+
+/// The case to run, or every parameter error in one message.
+pub fn validated(params: &CaseParams) -> Result<ValidCase> {
+    params.validated().map_err(|errors| {
+        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+        anyhow::anyhow!("invalid parameters: {}", text.join("; "))
+    })
 }
 
 /// F bar and H bar against l_k bar, with the inversion marked.

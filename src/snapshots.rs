@@ -29,10 +29,6 @@ struct Snapshot {
 
 pub fn run(args: Args) -> Result<()> {
     let params = args.params.params()?;
-    if let Err(errors) = params.validate() {
-        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
-        bail!("invalid parameters: {}", text.join("; "));
-    }
     let mut targets = args.at.clone();
     if targets.iter().any(|t| !(t.is_finite() && *t > 0.0 && *t < 1.0)) {
         bail!("--at: each l_c / L must be in (0, 1), got {:?}", args.at);
@@ -44,8 +40,9 @@ pub fn run(args: Args) -> Result<()> {
     stopped.stop_after_inversion = None;
     let last_l_k_bar = (1.0 - targets[targets.len() - 1]) * params.length / params.h;
     stopped.min_l_k_bar = stopped.min_l_k_bar.min(last_l_k_bar - params.sample_interval);
+    let case = crate::run::validated(&stopped)?;
     let mut shots: Vec<Snapshot> = Vec::new();
-    let report = protocol::run_observed(&stopped, &mut |p, points| {
+    let report = protocol::run_observed(&case, &mut |p, points| {
         let l_c_over_l = 1.0 - p.l_k_bar * params.h / params.length;
         while shots.len() < targets.len() && l_c_over_l >= targets[shots.len()] {
             shots.push(Snapshot {

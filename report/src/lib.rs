@@ -5,8 +5,10 @@
 //! - [`simplified`]: the simplified model's drawings (paper Sec. 5, Figs 12-15);
 //! - [`snapshot`]: side views of the knot framed as the paper's Fig. 1;
 //! - [`simplified_doc`] and [`validation`]: `docs/SIMPLIFIED_MODEL.md` and
-//!   `docs/VALIDATION.md` with the figures they link.
+//!   `docs/VALIDATION.md` with the figures they link;
+//! - [`parameters`]: the parameter table of `docs/API.md`.
 pub mod charts;
+pub mod parameters;
 pub mod simplified;
 pub mod simplified_doc;
 pub mod snapshot;

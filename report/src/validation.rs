@@ -306,7 +306,7 @@ pub fn markdown(
     let d = CaseParams::default();
     writeln!(
         doc,
-        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, friction at the {}, start twist {} (`start_twist`), pull protocol `{}` (`solver::protocol::Protocol`).\n",
+        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, friction at the {}, start twist {} (`start_twist`), pull protocol `{}` (`solver::case::Protocol`).\n",
         d.length,
         d.nodes,
         d.youngs_modulus,

@@ -1,10 +1,11 @@
 //! Schemas the derive macros cannot produce: `CaseParams` lives in the solver
 //! crate (no utoipa there), so its schema is generated from its serialisation
-//! (every field, its JSON type and the paper's default) plus the descriptions
-//! of `solver::case::PARAMETERS` (the ranges are checked by
-//! `CaseParams::validate`, which is authoritative).
+//! (every field, its JSON type and the paper's default) plus the table
+//! `solver::case::PARAMETERS`: each field's description, its words and its
+//! bounds where they are fixed numbers (`CaseParams::validate` checks the
+//! same table and is authoritative).
 use serde_json::Value;
-use solver::case::{CaseParams, PARAMETERS};
+use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
 use utoipa::openapi::schema::{ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
 
@@ -17,15 +18,35 @@ fn param_schema(name: &str, default: &Value) -> Schema {
         Value::Array(_) => SchemaType::Type(Type::Array),
         _ => SchemaType::Type(Type::String),
     };
-    let doc = PARAMETERS
-        .iter()
-        .find(|p| p.name == name)
-        .map(|p| p.doc.to_string());
-    ObjectBuilder::new()
+    let object = ObjectBuilder::new()
         .schema_type(ty)
-        .description(doc)
-        .default(Some(default.clone()))
-        .into()
+        .default(Some(default.clone()));
+    match PARAMETERS.iter().find(|p| p.name == name) {
+        Some(p) => with_range(object.description(Some(p.description())), p),
+        None => object,
+    }
+    .into()
+}
+
+/// The schema's `enum`, `minimum` and `maximum` (or their exclusive forms)
+/// from the parameter's range, where the range is fixed.
+fn with_range(object: ObjectBuilder, p: &Parameter) -> ObjectBuilder {
+    match p.range {
+        Range::Words(words) => object.enum_values(Some(words.iter().copied())),
+        Range::Integers(lo, hi) => object.minimum(Some(lo as f64)).maximum(Some(hi as f64)),
+        Range::Interval(lo, hi) => {
+            let object = match lo {
+                Bound::Closed(x) => object.minimum(Some(x)),
+                Bound::Open(x) => object.exclusive_minimum(Some(x)),
+            };
+            match hi {
+                Bound::Closed(y) => object.maximum(Some(y)),
+                Bound::Open(y) if y.is_finite() => object.exclusive_maximum(Some(y)),
+                Bound::Open(_) => object,
+            }
+        }
+        _ => object,
+    }
 }
 
 /// The `CaseParams` object schema: every field with its type and default.
@@ -60,6 +81,21 @@ pub fn partial_case_params() -> RefOr<Schema> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
+
+    /// The table's words, bounds and texts reach the schema.
+    #[test]
+    fn the_table_reaches_the_schema() {
+        let schema = serde_json::to_value(case_params_schema()).unwrap();
+        let props = &schema["properties"];
+        assert_eq!(props["protocol"]["enum"], json!(["reference", "adaptive"]));
+        assert_eq!(props["mu"]["minimum"].as_f64(), Some(0.0));
+        assert_eq!(props["mu"]["maximum"].as_f64(), Some(2.0));
+        assert_eq!(props["max_force_bar"]["exclusiveMinimum"].as_f64(), Some(0.0));
+        assert!(props["max_force_bar"].get("exclusiveMaximum").is_none());
+        let h = props["h"]["description"].as_str().unwrap();
+        assert!(h.contains("Range: [L/16000, L/50) m."), "{h}");
+    }
 
     #[test]
     fn every_parameter_is_documented() {

@@ -2,8 +2,11 @@
 //! following Sec. 3 of "Snap buckling of overhand knots" (the paper).
 //!
 //! Layout follows the paper: `rod` (DOFs and frames, Sec. 3.1), `energies`
-//! (eq. 6), `external` (eq. 7c), `stepper` (eq. 7), `contact` (Sec. 3.2).
-//! Pure computation: no I/O, deterministic for given inputs.
+//! (eq. 6), `external` (eq. 7c), `stepper` (eq. 7, over `linalg`'s banded
+//! LDL^T), `contact` (Sec. 3.2), `pipeline` (one step), `knot` and
+//! `protocol` with `measurements` (Sec. 4), `simplified` (Sec. 5); `case`
+//! defines a case's parameters and validates them. Pure computation: no I/O,
+//! deterministic for given inputs.
 pub mod case;
 pub mod contact;
 pub mod counters;
@@ -20,3 +23,4 @@ pub mod simplified;
 pub mod stepper;
 pub mod time_step;
 pub mod validation;
+mod words;

@@ -2,7 +2,7 @@
 //! (equal material frames, no relative rotation), relax with the ends held,
 //! then pull the clamps apart along the line joining them at a steady speed,
 //! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
-use crate::case::{CaseParams, StartShape};
+use crate::case::{CaseParams, ParamError, Protocol, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::external::Environment;
 use crate::knot;
@@ -12,6 +12,7 @@ use crate::pipeline::{ContactOptions, World, WorldStepReport};
 use crate::rod::{End, Rod};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
+use crate::words::serde_word;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -46,19 +47,7 @@ impl Status {
     ];
 }
 
-/// Writes a unit enum as its serde name: the word reports and the API use.
-fn serde_word(value: &impl Serialize, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-    let word = serde_json::to_value(value).map_err(|_| std::fmt::Error)?;
-    f.write_str(word.as_str().ok_or(std::fmt::Error)?)
-}
-
 impl std::fmt::Display for Status {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        serde_word(self, f)
-    }
-}
-
-impl std::fmt::Display for Protocol {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         serde_word(self, f)
     }
@@ -68,32 +57,6 @@ impl std::fmt::Display for Stage {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         serde_word(self, f)
     }
-}
-
-/// How fast the clamps move along the pull (case parameter `protocol`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Protocol {
-    /// The whole pull at `pull_speed` (the paper's protocol).
-    #[default]
-    Reference,
-    /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
-    /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
-    /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
-    /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
-    /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
-    /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
-    /// times the case's), and pulls through the snap at `pull_speed`
-    /// (`SNAP_FACTOR`) with the case's damping and step, fast again from
-    /// `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the restart means
-    /// the restart was past the fold: it is redone from `RESTART_BEFORE`
-    /// further back. A snap stage that finds no snap within `FALSE_ALARM`
-    /// approaches fast again; a fast approach that reaches the end of the
-    /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
-    /// whole pull is the reference's. The report's `stages` list what ran.
-    /// Its inversion lies within 1 % of the reference's, but the fast
-    /// approach reads F bar 5-20 % high (BENCHMARKS.md, "Pull protocols").
-    Adaptive,
 }
 
 /// [`Protocol::Adaptive`]: the largest friction coefficient it runs fast
@@ -289,36 +252,100 @@ const SNAP_WINDOW: f64 = 10.0;
 /// Damping rate (1/s) while relaxing.
 const RELAX_DAMPING: f64 = 20.0;
 
-/// Runs one case. `observer` sees progress after every sample and returns
-/// `false` to cancel.
+/// Runs one case: validates `params`, building the start shape once, and
+/// runs it ([`run_valid`]); invalid parameters give a report with
+/// [`Status::Invalid`] and the reasons. `observer` sees progress after every
+/// sample and returns `false` to cancel.
+///
+/// A short rod with one pass, pulled quickly until l_k bar falls below 130:
+/// ```
+/// use solver::case::CaseParams;
+/// use solver::protocol::{self, Status};
+///
+/// let params = CaseParams {
+///     n: 1,
+///     length: 0.3,
+///     nodes: 102,
+///     relax_time: 0.1,
+///     pull_speed: 0.01,
+///     min_l_k_bar: 130.0,
+///     ..CaseParams::default()
+/// };
+/// let mut samples = 0;
+/// let report = protocol::run(&params, &mut |_| {
+///     samples += 1;
+///     true
+/// });
+/// assert_eq!(report.status, Status::Completed, "{}", report.reason);
+/// assert_eq!(report.determinant_initial, Some(3), "a trefoil: 2n + 1");
+/// assert_eq!(report.series.len(), samples);
+/// let l_k_bar: Vec<f64> = report.series.iter().map(|s| s.l_k_bar).collect();
+/// assert!(l_k_bar.windows(2).all(|w| w[1] < w[0]), "the pull shortens the knot");
+/// assert!(l_k_bar[0] > 135.0 && l_k_bar[l_k_bar.len() - 1] < 130.0);
+/// ```
 pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
-    run_observed(params, &mut |progress, _| observer(progress))
+    let started = std::time::Instant::now();
+    match params.validated() {
+        Ok(case) => run_from(&case, started, &mut |progress, _| observer(progress)),
+        Err(errors) => {
+            let mut report = CaseReport::empty(params.clone(), Status::Invalid);
+            report.reason = reasons(&errors);
+            report
+        }
+    }
 }
 
-/// [`run`] with the rod's centre line (node positions) handed to the
-/// observer with every sample's progress. The stages of paper Sec. 4: build
-/// the knot, relax it with the ends held, pull the clamps apart sampling
-/// eq. (11) until the stop condition, and report.
+/// [`run`] for a case already validated, from the start shape its validation built.
+pub fn run_valid(case: &ValidCase, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
+    run_from(case, std::time::Instant::now(), &mut |progress, _| {
+        observer(progress)
+    })
+}
+
+/// [`run_valid`] with the rod's centre line (node positions) handed to the
+/// observer with every sample's progress.
 pub fn run_observed(
-    params: &CaseParams,
+    case: &ValidCase,
     observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
 ) -> CaseReport {
-    let started = std::time::Instant::now();
+    run_from(case, std::time::Instant::now(), observer)
+}
+
+/// The stages of paper Sec. 4 from `started`: clamp the start shape, relax
+/// it with the ends held, pull the clamps apart sampling eq. (11) until the
+/// stop condition, and report.
+fn run_from(
+    case: &ValidCase,
+    started: std::time::Instant,
+    observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
+) -> CaseReport {
+    let params = case.params();
     let mut report = CaseReport::empty(params.clone(), Status::Completed);
-    let (shape, world) = match build(params, &mut report) {
-        Ok(built) => built,
+    let world = match build(case, &mut report) {
+        Ok(world) => world,
         Err(reason) => {
             report.status = Status::Invalid;
             report.reason = reason;
             return report;
         }
     };
-    let mut case = Case::new(params, report, world, started);
-    let ending = case.relax().and_then(|()| case.pull(shape.loop_middle, observer));
-    case.finish(ending.err().unwrap_or(Ending {
+    let mut run = Case::new(params, report, world, started);
+    let ending = run
+        .relax()
+        .and_then(|()| run.pull(case.start().loop_middle, observer));
+    run.finish(ending.err().unwrap_or(Ending {
         status: Status::Completed,
         reason: String::new(),
     }))
+}
+
+/// Parameter errors as one line.
+fn reasons(errors: &[ParamError]) -> String {
+    errors
+        .iter()
+        .map(|e| e.to_string())
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Why a case stopped before the end of its pull.
@@ -336,17 +363,11 @@ impl Ending {
     }
 }
 
-/// Stage 1, the knot: the start shape (built or the user's) with its knot
-/// type checked, and the world holding it as a clamped DER rod with the
+/// Stage 1, the knot: the case's start shape (built or the user's) with its
+/// knot type checked, and the world holding it as a clamped DER rod with the
 /// case's contact, friction and time-stepping options.
-fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, World), String> {
-    let shape = params.validated_start().map_err(|errors| {
-        errors
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("; ")
-    })?;
+fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
+    let (params, shape) = (case.params(), case.start());
     let expected = knot::expected_determinant(params.n);
     report.determinant_initial = knot::knot_determinant(&shape.points).ok();
     if report.determinant_initial != Some(expected) {
@@ -389,7 +410,7 @@ fn build(params: &CaseParams, report: &mut CaseReport) -> Result<(StartShape, Wo
         gravity: Vector3::from(params.gravity),
         damping: RELAX_DAMPING,
     };
-    Ok((shape, World::new(vec![rod], env, contact, newton)))
+    Ok(World::new(vec![rod], env, contact, newton))
 }
 
 /// The pulling force (N) the clamps exert along `axis` after the last step:

@@ -123,11 +123,46 @@ pub struct Stepper {
     factorizations: u64,
 }
 
+/// A converged Newton solve.
 struct Attempt {
     iterations: u32,
     residual: f64,
     negative_pivots: usize,
     energies: Energies,
+}
+
+/// Where a Newton solve stands.
+struct Iterate {
+    energies: Energies,
+    /// The incremental potential Phi.
+    phi: f64,
+    /// The largest free residual entry over its tolerance ([`scaled_norm`]).
+    scaled: f64,
+    /// Negative pivots of the factorisation in use.
+    negative_pivots: usize,
+    /// The assembled Hessian is this iterate's.
+    hessian_current: bool,
+    /// The factorisation in use is an earlier step's, not yet found wanting.
+    stale: bool,
+}
+
+impl Iterate {
+    /// The solve, converged after `iterations` with the force residual `residual`.
+    fn converged(self, iterations: u32, residual: f64) -> Attempt {
+        Attempt {
+            iterations,
+            residual,
+            negative_pivots: self.negative_pivots,
+            energies: self.energies,
+        }
+    }
+}
+
+/// The convergence test's tolerances on free forces (N) and moments (N m).
+#[derive(Clone, Copy)]
+struct Tolerances {
+    force: f64,
+    moment: f64,
 }
 
 impl Stepper {
@@ -233,10 +268,7 @@ impl Stepper {
             self.factor(rod, c_in)?;
         }
         self.residual_and_potential(rod, dt, c_in, energies.total());
-        for j in 0..rod.ndof() {
-            self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
-        }
-        self.ldlt[self.active].solve_in_place(&mut self.delta);
+        self.solve_direction(rod);
         for (v, ((q, d), q0)) in velocity
             .iter_mut()
             .zip(rod.q.iter().zip(&self.delta).zip(&rod.q_old))
@@ -313,102 +345,155 @@ impl Stepper {
         })
     }
 
+    /// One Newton solve of the step of length `h` from the guess `q_0 + h
+    /// v_0`: on failure, why and after how many iterations.
     fn attempt(&mut self, rod: &mut Rod, env: &Environment, h: f64) -> Result<Attempt, (NewtonFailure, u32)> {
         let c_in = env.damping_factor(h) / (h * h);
+        let tol = self.tolerances(rod, env);
+        guess(rod, h);
+        let mut it = self.first_iterate(rod, h, c_in, tol);
+        for iteration in 0..self.options.max_iterations {
+            if it.scaled <= 1.0 {
+                return Ok(it.converged(iteration, force_norm(rod, &self.resid)));
+            }
+            if !it.stale {
+                self.refactor(rod, c_in, &mut it).map_err(|f| (f, iteration))?;
+            }
+            self.solve_direction(rod);
+            let slope = self.slope(rod);
+            if slope >= 0.0 || slope.is_nan() {
+                if it.stale {
+                    // The reused matrix gives no descent: factor this iterate's.
+                    it.stale = false;
+                    continue;
+                }
+                return Err((NewtonFailure::NotDescent, iteration));
+            }
+            self.line_search(rod, (h, c_in), tol, slope, &mut it)
+                .map_err(|f| (f, iteration + 1))?;
+        }
+        if it.scaled <= 1.0 {
+            return Ok(it.converged(self.options.max_iterations, force_norm(rod, &self.resid)));
+        }
+        Err((
+            NewtonFailure::IterationCap(it.scaled),
+            self.options.max_iterations,
+        ))
+    }
+
+    /// The convergence test's tolerances (see [`NewtonOptions::rtol`]).
+    fn tolerances(&self, rod: &Rod, env: &Environment) -> Tolerances {
         let edge = rod.length() / rod.edges() as f64;
         let extent = (0..rod.nodes())
             .map(|i| rod.node(i).amax())
             .fold(rod.length(), f64::max);
         let floor = 100.0 * f64::EPSILON * rod.section.ea * extent / edge;
-        let f_tol = (self.options.rtol * self.force_scale(rod, env)).max(floor);
-        let m_tol = f_tol * edge;
-        guess(rod, h);
+        let force = (self.options.rtol * self.force_scale(rod, env)).max(floor);
+        Tolerances {
+            force,
+            moment: force * edge,
+        }
+    }
+
+    /// The iterate at the guess, with the factorisation at hand reused when
+    /// it is one of a step of this length
+    /// ([`NewtonOptions::reuse_factorization`]).
+    fn first_iterate(&mut self, rod: &Rod, h: f64, c_in: f64, tol: Tolerances) -> Iterate {
         let reuse = self.options.reuse_factorization && self.factored_c_in == Some(c_in);
-        let mut energies = if reuse {
+        let energies = if reuse {
             energies::evaluate(rod, Terms::ALL, &mut self.grad, None)
         } else {
             energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess))
         };
-        let mut phi = self.residual_and_potential(rod, h, c_in, energies.total());
-        let mut scaled = scaled_norm(rod, &self.resid, f_tol, m_tol);
+        let phi = self.residual_and_potential(rod, h, c_in, energies.total());
+        let scaled = scaled_norm(rod, &self.resid, tol);
         // A reused matrix keeps the inertia it was factored with.
-        let mut negative_pivots = match self.ldlt[self.active].inertia() {
+        let negative_pivots = match self.ldlt[self.active].inertia() {
             Some(inertia) if reuse => inertia.negative,
             _ => 0,
         };
-        let mut hessian_current = !reuse;
-        let mut stale = reuse;
-        for iteration in 0..self.options.max_iterations {
-            if scaled <= 1.0 {
-                return Ok(Attempt {
-                    iterations: iteration,
-                    residual: force_norm(rod, &self.resid),
-                    negative_pivots,
-                    energies,
-                });
-            }
-            if !stale {
-                if !hessian_current {
-                    energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
-                }
-                negative_pivots = self.factor(rod, c_in).map_err(|f| (f, iteration))?;
-            }
-            let mut slope = 0.0;
-            for j in 0..rod.ndof() {
-                self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
-            }
-            self.ldlt[self.active].solve_in_place(&mut self.delta);
-            for j in 0..rod.ndof() {
-                if !rod.fixed[j] {
-                    slope += self.resid[j] * self.delta[j];
-                }
-            }
-            if stale && (slope >= 0.0 || slope.is_nan()) {
-                stale = false;
-                continue;
-            }
-            if slope >= 0.0 || slope.is_nan() {
-                return Err((NewtonFailure::NotDescent, iteration));
-            }
-            self.q_base.copy_from_slice(&rod.q);
-            let mut alpha = 1.0;
-            let mut backtracks = 0;
-            loop {
-                for ((q, b), d) in rod.q.iter_mut().zip(&self.q_base).zip(&self.delta) {
-                    *q = b + alpha * d;
-                }
-                rod.update_geometry();
-                // Gradient only: the Hessian is assembled if another iteration follows.
-                let trial = energies::evaluate(rod, Terms::ALL, &mut self.grad, None);
-                let phi_trial = self.residual_and_potential(rod, h, c_in, trial.total());
-                let scaled_trial = scaled_norm(rod, &self.resid, f_tol, m_tol);
-                let finite = phi_trial.is_finite() && scaled_trial.is_finite();
-                if finite && (phi_trial <= phi + 1e-4 * alpha * slope || scaled_trial < scaled) {
-                    if stale && (backtracks > 0 || scaled_trial > 0.1 * scaled) {
-                        stale = false;
-                    }
-                    energies = trial;
-                    phi = phi_trial;
-                    scaled = scaled_trial;
-                    hessian_current = false;
-                    break;
-                }
-                backtracks += 1;
-                if backtracks > self.options.max_backtracks {
-                    return Err((NewtonFailure::LineSearch, iteration + 1));
-                }
-                alpha *= 0.5;
+        Iterate {
+            energies,
+            phi,
+            scaled,
+            negative_pivots,
+            hessian_current: !reuse,
+            stale: reuse,
+        }
+    }
+
+    /// Factors the Newton matrix at the iterate, assembling its Hessian
+    /// first unless that is at hand.
+    fn refactor(&mut self, rod: &Rod, c_in: f64, it: &mut Iterate) -> Result<(), NewtonFailure> {
+        if !it.hessian_current {
+            energies::evaluate(rod, Terms::ALL, &mut self.grad, Some(&mut self.hess));
+        }
+        it.negative_pivots = self.factor(rod, c_in)?;
+        Ok(())
+    }
+
+    /// The Newton direction `delta = -A^-1 r` (zero at fixed DOFs) with the
+    /// current factorisation.
+    fn solve_direction(&mut self, rod: &Rod) {
+        for j in 0..rod.ndof() {
+            self.delta[j] = if rod.fixed[j] { 0.0 } else { -self.resid[j] };
+        }
+        self.ldlt[self.active].solve_in_place(&mut self.delta);
+    }
+
+    /// The slope `r . delta` of Phi along the direction, over the free DOFs.
+    fn slope(&self, rod: &Rod) -> f64 {
+        let mut slope = 0.0;
+        for j in 0..rod.ndof() {
+            if !rod.fixed[j] {
+                slope += self.resid[j] * self.delta[j];
             }
         }
-        if scaled <= 1.0 {
-            return Ok(Attempt {
-                iterations: self.options.max_iterations,
-                residual: force_norm(rod, &self.resid),
-                negative_pivots,
-                energies,
-            });
+        slope
+    }
+
+    /// Backtracking along the direction from the iterate `it` of the step
+    /// `(h, c_in)`: the first step length, halving from 1, that decreases
+    /// Phi enough (Armijo) or cuts the scaled residual becomes the iterate.
+    /// A reused factorisation turns stale when it needed a backtrack or cut
+    /// the residual less than tenfold.
+    fn line_search(
+        &mut self,
+        rod: &mut Rod,
+        (h, c_in): (f64, f64),
+        tol: Tolerances,
+        slope: f64,
+        it: &mut Iterate,
+    ) -> Result<(), NewtonFailure> {
+        self.q_base.copy_from_slice(&rod.q);
+        let mut alpha = 1.0;
+        let mut backtracks = 0;
+        loop {
+            for ((q, b), d) in rod.q.iter_mut().zip(&self.q_base).zip(&self.delta) {
+                *q = b + alpha * d;
+            }
+            rod.update_geometry();
+            // Gradient only: the Hessian is assembled if another iteration follows.
+            let trial = energies::evaluate(rod, Terms::ALL, &mut self.grad, None);
+            let phi_trial = self.residual_and_potential(rod, h, c_in, trial.total());
+            let scaled_trial = scaled_norm(rod, &self.resid, tol);
+            let finite = phi_trial.is_finite() && scaled_trial.is_finite();
+            if finite && (phi_trial <= it.phi + 1e-4 * alpha * slope || scaled_trial < it.scaled) {
+                if it.stale && (backtracks > 0 || scaled_trial > 0.1 * it.scaled) {
+                    it.stale = false;
+                }
+                it.energies = trial;
+                it.phi = phi_trial;
+                it.scaled = scaled_trial;
+                it.hessian_current = false;
+                return Ok(());
+            }
+            backtracks += 1;
+            if backtracks > self.options.max_backtracks {
+                return Err(NewtonFailure::LineSearch);
+            }
+            alpha *= 0.5;
         }
-        Err((NewtonFailure::IterationCap(scaled), self.options.max_iterations))
     }
 
     /// Factors `c_in M` plus the assembled Hessian (fixed DOFs held) into the
@@ -475,12 +560,12 @@ fn guess(rod: &mut Rod, h: f64) {
     rod.update_geometry();
 }
 
-/// max over free DOFs of |r_j| / tol_j (forces against `f_tol`, moments against `m_tol`).
-fn scaled_norm(rod: &Rod, r: &[f64], f_tol: f64, m_tol: f64) -> f64 {
+/// max over free DOFs of |r_j| / tol_j (forces and moments against their tolerances).
+fn scaled_norm(rod: &Rod, r: &[f64], tol: Tolerances) -> f64 {
     let mut s: f64 = 0.0;
     for (j, v) in r.iter().enumerate() {
         if !rod.fixed[j] {
-            let tol = if j % 4 == 3 { m_tol } else { f_tol };
+            let tol = if j % 4 == 3 { tol.moment } else { tol.force };
             s = s.max(v.abs() / tol);
         }
     }

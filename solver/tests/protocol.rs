@@ -1,4 +1,4 @@
-//! The pull protocols (`solver::protocol::Protocol`): the adaptive pull finds
+//! The pull protocols (`solver::case::Protocol`): the adaptive pull finds
 //! the reference pull's inversion in far fewer steps.
 use solver::case::{CaseParams, Protocol};
 use solver::protocol::{self, Stage, Status};

@@ -207,6 +207,49 @@ struct Row {
 }
 
 impl Row {
+    /// The row of `contact` with the free velocities `v_free` (and the spin
+    /// DOFs' `spin`, rolling) over a step `dt`, its force `warm` or zero
+    /// (zero too when the contact cannot act); `close_gap` as in
+    /// [`GaussSeidelOptions::close_gap`].
+    fn new(
+        contact: &ContactPoint,
+        inv_mass: &[f64],
+        v_free: &[Vector3<f64>],
+        spin: Option<SpinDofs>,
+        dt: f64,
+        close_gap: bool,
+        warm: Option<&Vector3<f64>>,
+    ) -> Self {
+        let frame = ContactFrame::from_normal(&contact.normal);
+        let (spin_free, spin_push, spin_block) = spin_terms(contact, &frame, spin, dt);
+        let w_n = dt * self_block(contact, inv_mass);
+        let w_t = w_n + largest_eigenvalue(spin_block);
+        let mut free = frame.to_local(&(gather(contact, v_free) + spin_free));
+        free.x += if close_gap {
+            contact.gap
+        } else {
+            contact.gap.max(0.0)
+        } / dt;
+        Self {
+            nodes: contact.nodes,
+            weights: contact.weights,
+            push: std::array::from_fn(|k| dt * inv_mass[contact.nodes[k]] * contact.weights[k]),
+            spin_edges: [contact.spin[0].0, contact.spin[1].0],
+            spin_levers: [contact.spin[0].1, contact.spin[1].1],
+            spin_push,
+            frame,
+            inv_w_n: if w_n > 0.0 { 1.0 / w_n } else { 0.0 },
+            inv_w_t: if w_n > 0.0 { 1.0 / w_t } else { 0.0 },
+            mu: contact.mu,
+            sliding: frame.to_local(&contact.sliding_direction),
+            free,
+            r: match warm {
+                Some(force) if w_n > 0.0 => frame.to_local(force),
+                _ => Vector3::zeros(),
+            },
+        }
+    }
+
     /// Current local relative velocity `u_c` given the velocity corrections.
     #[inline(always)]
     fn velocity(&self, dv: &[Vector3<f64>], dspin: &[f64]) -> Vector3<f64> {
@@ -347,55 +390,24 @@ impl GaussSeidel {
         self.dspin.resize(edges, 0.0);
         self.rows.clear();
         for (c, contact) in contacts.iter().enumerate() {
-            let frame = ContactFrame::from_normal(&contact.normal);
-            let mut spin_free = Vector3::zeros();
-            let mut spin_push = [0.0; 2];
-            // The spin part of the tangential block, sum_k (dt / I_k) L_k L_k^T
-            // in the local tangent axes: entries (t1 t1, t1 t2, t2 t2).
-            let mut spin_block = [0.0; 3];
-            if let Some(sp) = spin {
-                for (k, (e, lever)) in contact.spin.iter().enumerate() {
-                    if *lever != Vector3::zeros() && *e < edges {
-                        spin_free += lever * sp.free[*e];
-                        spin_push[k] = dt * sp.inv_inertia[*e];
-                        let l = frame.to_local(lever);
-                        spin_block[0] += spin_push[k] * l.y * l.y;
-                        spin_block[1] += spin_push[k] * l.y * l.z;
-                        spin_block[2] += spin_push[k] * l.z * l.z;
-                    }
-                }
-            }
-            let w_n = dt * self_block(contact, inv_mass);
-            let w_t = w_n + largest_eigenvalue(spin_block);
-            let mut free = frame.to_local(&(gather(contact, v_free) + spin_free));
-            free.x += if options.close_gap {
-                contact.gap
-            } else {
-                contact.gap.max(0.0)
-            } / dt;
-            let row = Row {
-                nodes: contact.nodes,
-                weights: contact.weights,
-                push: std::array::from_fn(|k| dt * inv_mass[contact.nodes[k]] * contact.weights[k]),
-                spin_edges: [contact.spin[0].0, contact.spin[1].0],
-                spin_levers: [contact.spin[0].1, contact.spin[1].1],
-                spin_push,
-                frame,
-                inv_w_n: if w_n > 0.0 { 1.0 / w_n } else { 0.0 },
-                inv_w_t: if w_n > 0.0 { 1.0 / w_t } else { 0.0 },
-                mu: contact.mu,
-                sliding: frame.to_local(&contact.sliding_direction),
-                free,
-                r: match warm_start {
-                    Some(forces) if w_n > 0.0 => frame.to_local(&forces[c]),
-                    _ => Vector3::zeros(),
-                },
-            };
+            let warm = warm_start.map(|forces| &forces[c]);
+            let row = Row::new(contact, inv_mass, v_free, spin, dt, options.close_gap, warm);
             row.push(&row.r, &mut self.dv, &mut self.dspin);
             self.rows.push(row);
         }
         sweep_order(&self.rows, &mut self.order);
+        let (sweeps, converged) = self.sweep(options);
+        self.collect_forces(nodes, edges);
+        Ok(SolveReport {
+            sweeps,
+            residual: self.residual(),
+            converged,
+        })
+    }
 
+    /// Sweeps the rows in order until a stopping rule holds or the sweep cap
+    /// is reached; returns the sweeps taken and whether a rule held.
+    fn sweep(&mut self, options: &GaussSeidelOptions) -> (usize, bool) {
         let mut sweeps = 0;
         let mut converged = false;
         while sweeps < options.max_sweeps && !converged {
@@ -417,7 +429,12 @@ impl GaussSeidel {
             converged = max_change2 <= options.tolerance.powi(2) * max_force2
                 || (sweeps % RESIDUAL_EVERY == 0 && self.residual() <= options.tolerance);
         }
+        (sweeps, converged)
+    }
 
+    /// The rows' forces in world coordinates, per contact, summed per node
+    /// and as torques per edge (of `nodes` nodes and `edges` spinning edges).
+    fn collect_forces(&mut self, nodes: usize, edges: usize) {
         self.forces.clear();
         self.node_forces.clear();
         self.node_forces.resize(nodes, Vector3::zeros());
@@ -435,11 +452,6 @@ impl GaussSeidel {
             }
             self.forces.push(force);
         }
-        Ok(SolveReport {
-            sweeps,
-            residual: self.residual(),
-            converged,
-        })
     }
 
     /// Natural-map residual of the current iterate, `max_c || r_c - P_K(r_c -
@@ -473,6 +485,35 @@ fn sweep_order(rows: &[Row], order: &mut Vec<usize>) {
     for parity in [0, 1] {
         order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].inv_w_n > 0.0));
     }
+}
+
+/// Rolling's terms of a contact's row: the free velocity the spin DOFs add
+/// (world), each lever's twist-rate change per unit torque (`dt / I`), and
+/// the spin part of the tangential block, `sum_k (dt / I_k) L_k L_k^T` in the
+/// local tangent axes: entries (t1 t1, t1 t2, t2 t2). Zero without `spin`.
+fn spin_terms(
+    contact: &ContactPoint,
+    frame: &ContactFrame,
+    spin: Option<SpinDofs>,
+    dt: f64,
+) -> (Vector3<f64>, [f64; 2], [f64; 3]) {
+    let mut spin_free = Vector3::zeros();
+    let mut spin_push = [0.0; 2];
+    let mut spin_block = [0.0; 3];
+    if let Some(sp) = spin {
+        let edges = sp.inv_inertia.len();
+        for (k, (e, lever)) in contact.spin.iter().enumerate() {
+            if *lever != Vector3::zeros() && *e < edges {
+                spin_free += lever * sp.free[*e];
+                spin_push[k] = dt * sp.inv_inertia[*e];
+                let l = frame.to_local(lever);
+                spin_block[0] += spin_push[k] * l.y * l.y;
+                spin_block[1] += spin_push[k] * l.y * l.z;
+                spin_block[2] += spin_push[k] * l.z * l.z;
+            }
+        }
+    }
+    (spin_free, spin_push, spin_block)
 }
 
 /// `sum_k w_ck x_k` over the contact's nodes.

@@ -48,6 +48,22 @@ pub struct SegmentPair {
 }
 
 /// Closest points between segments `[p0, p1]` and `[q0, q1]`.
+///
+/// Two segments crossing at right angles, one unit apart:
+/// ```
+/// use nalgebra::Vector3;
+/// use solver::contact::segment::closest_points;
+///
+/// let pair = closest_points(
+///     &Vector3::new(-1.0, 0.0, 0.0),
+///     &Vector3::new(1.0, 0.0, 0.0),
+///     &Vector3::new(0.0, -1.0, 1.0),
+///     &Vector3::new(0.0, 3.0, 1.0),
+/// );
+/// assert_eq!((pair.s, pair.t, pair.distance), (0.5, 0.25, 1.0));
+/// assert_eq!(pair.point_a, Vector3::zeros());
+/// assert_eq!(pair.point_b, Vector3::new(0.0, 0.0, 1.0));
+/// ```
 pub fn closest_points(
     p0: &Vector3<f64>,
     p1: &Vector3<f64>,

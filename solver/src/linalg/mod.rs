@@ -1,4 +1,3 @@
 //! Linear algebra for the Newton systems: a banded LDL^T (the DER Hessian is
-//! banded in the DOF order of eq. 1) and a general sparse path.
+//! banded in the DOF order of eq. 1).
 pub mod banded;
-pub mod sparse;

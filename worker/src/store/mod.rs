@@ -504,7 +504,7 @@ mod tests {
             .map(|mu| {
                 NewCase::new(CaseParams {
                     mu,
-                    protocol: solver::protocol::Protocol::Adaptive,
+                    protocol: solver::case::Protocol::Adaptive,
                     ..CaseParams::default()
                 })
             })

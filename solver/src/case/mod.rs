@@ -1,0 +1,335 @@
+//! The one definition of a knot case: its parameters ([`CaseParams`], the
+//! table [`PARAMETERS`] that documents and bounds them), their validation and
+//! the case to run ([`ValidCase`]), shared by the CLI, the API, the queue and
+//! the solver. SI units.
+mod params;
+mod table;
+
+pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
+use crate::knot::{KnotSpec, StartShape};
+use crate::words::serde_word;
+pub use params::{CaseParams, PARAMETERS};
+use serde::{Deserialize, Serialize};
+pub use table::{Bound, Parameter, Range};
+
+/// Revision of the physics: raised whenever a change to the model or its
+/// defaults changes results, and part of every case's cache key, so that
+/// results computed under older physics are never served as current.
+/// Revision 1: the model of session 3 (friction at the centre lines).
+/// Revision 2: friction at the surfaces, so rods roll on each other
+/// (`rolling`, docs/FIDELITY.md).
+/// Revision 3: the adaptive pull is the default protocol (`protocol`).
+/// Revision 4: the contact solve steps each contact's normal force by the
+/// exact normal entry of its Delassus block instead of the rolling block's
+/// largest eigenvalue, and starts from the forces extrapolated from the last
+/// two steps: the same solutions, reached in about a sixth of the sweeps, so
+/// each step's forces are closer to them at the same tolerance.
+/// Revision 5: the paper's model and start: friction at the centre lines
+/// (`rolling` false), the knot starts with the paper's code's twist
+/// (`start_twist`, linking number 2n), the reference pull is the default
+/// protocol, and F bar is the clamp force averaged over each sample's
+/// interval (docs/FIDELITY.md).
+pub const PHYSICS_REVISION: u32 = 5;
+
+/// How fast the clamps move along the pull (case parameter `protocol`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Protocol {
+    /// The whole pull at `pull_speed` (the paper's protocol).
+    #[default]
+    Reference,
+    /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
+    /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
+    /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
+    /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
+    /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
+    /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
+    /// times the case's), and pulls through the snap at `pull_speed`
+    /// (`SNAP_FACTOR`) with the case's damping and step, fast again from
+    /// `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the restart means
+    /// the restart was past the fold: it is redone from `RESTART_BEFORE`
+    /// further back. A snap stage that finds no snap within `FALSE_ALARM`
+    /// approaches fast again; a fast approach that reaches the end of the
+    /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
+    /// whole pull is the reference's. The report's `stages` list what ran.
+    /// Its inversion lies within 1 % of the reference's, but the fast
+    /// approach reads F bar 5-20 % high (BENCHMARKS.md, "Pull protocols").
+    Adaptive,
+}
+
+impl std::fmt::Display for Protocol {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        serde_word(self, f)
+    }
+}
+
+/// Largest node count K.
+pub const MAX_NODES: usize = 4001;
+/// h >= L / this: with edges of at most 4h ([`crate::knot::build`]) and at most
+/// [`MAX_NODES`] nodes, a thinner rod cannot be meshed.
+pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
+
+/// The default (largest) time step (s) at the paper's edge length
+/// [`REFERENCE_EDGE`]: half the paper's code's 1 ms. With rods that roll, the
+/// inversion at 1 ms differs by 1.5 % from the converged one, while 0.5 ms
+/// agrees with 0.25 ms within 0.4 % (n = 3: 139.8, 137.4, 137.9; n = 4:
+/// 226.7, 223.0, 223.0 at 1, 0.5, 0.25 ms; docs/FIDELITY.md).
+pub const REFERENCE_DT: f64 = 5e-4;
+/// The paper's edge length (m): L = 1 m with K = 301 nodes.
+pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;
+
+/// A case whose parameters passed [`CaseParams::validated`], with the start
+/// shape that validation built, so that running it builds no knot again.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValidCase {
+    params: CaseParams,
+    start: StartShape,
+}
+
+impl ValidCase {
+    /// The validated parameters.
+    pub fn params(&self) -> &CaseParams {
+        &self.params
+    }
+
+    /// The shape the case starts from: `initial_shape` or the builder's knot.
+    pub fn start(&self) -> &StartShape {
+        &self.start
+    }
+}
+
+/// The knots built so far in one validation pass, by spec, with the
+/// builder's refusal if it refused ([`CaseParams::validate_in`]).
+#[derive(Debug, Default)]
+pub struct BuildChecks(Vec<(KnotSpec, Option<ParamError>)>);
+
+/// A parameter outside its documented range.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct ParamError {
+    pub field: String,
+    pub reason: String,
+}
+
+impl CaseParams {
+    /// Checks every documented range and that the case can start
+    /// ([`CaseParams::validated`]); returns all violations.
+    ///
+    /// ```
+    /// use solver::case::CaseParams;
+    ///
+    /// assert!(CaseParams::default().validate().is_ok());
+    /// let errors = CaseParams { mu: -0.5, ..CaseParams::default() }.validate().unwrap_err();
+    /// assert_eq!(errors.len(), 1);
+    /// assert_eq!(errors[0].field, "mu");
+    /// assert_eq!(errors[0].reason, "must be in [0, 2], got -0.5");
+    /// ```
+    pub fn validate(&self) -> Result<(), Vec<ParamError>> {
+        self.validate_in(&mut BuildChecks::default())
+    }
+
+    /// [`CaseParams::validate`], building each distinct knot once per `checks`:
+    /// a grid over parameters the start shape does not read (`mu`, speeds,
+    /// ...) builds one knot, not one per case.
+    pub fn validate_in(&self, checks: &mut BuildChecks) -> Result<(), Vec<ParamError>> {
+        let errors = self.range_errors();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        if self.initial_shape.is_some() {
+            return self.start_shape().map(|_| ()).map_err(|e| vec![e]);
+        }
+        let spec = self.knot_spec();
+        let outcome = match checks.0.iter().find(|(s, _)| *s == spec) {
+            Some((_, outcome)) => outcome.clone(),
+            None => {
+                let outcome = self.start_shape().err();
+                checks.0.push((spec, outcome.clone()));
+                outcome
+            }
+        };
+        outcome.map_or(Ok(()), |e| Err(vec![e]))
+    }
+
+    /// The checks of [`CaseParams::validate`] and the start shape in one
+    /// pass: the case to run.
+    pub fn validated(&self) -> Result<ValidCase, Vec<ParamError>> {
+        let errors = self.range_errors();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let start = self.start_shape().map_err(|e| vec![e])?;
+        Ok(ValidCase {
+            params: self.clone(),
+            start,
+        })
+    }
+
+    /// Every range of [`PARAMETERS`] that does not hold, in the table's order.
+    fn range_errors(&self) -> Vec<ParamError> {
+        PARAMETERS.iter().filter_map(|p| p.check(self)).collect()
+    }
+
+    /// The knot builder's input for this case.
+    pub fn knot_spec(&self) -> KnotSpec {
+        KnotSpec {
+            n: self.n,
+            length: self.length,
+            nodes: self.nodes,
+            radius: self.h,
+            clamp_span: self.end_to_end,
+            pass_length: self.braid_length,
+            loop_length: None,
+        }
+    }
+
+    /// The (largest) time step: `dt` if given, else [`REFERENCE_DT`] scaled by the square of
+    /// the edge length relative to the paper's (L = 1 m, K = 301), capped at
+    /// 10 ms. The contact forces are explicit with the mass-only Delassus
+    /// operator (Sec. 3.2), which resists motion with a stiffness of about
+    /// m / dt^2 per node against a bending stiffness of about EI / l_e^3; keeping
+    /// their ratio as at the paper's resolution needs dt proportional to l_e^2.
+    /// With a constant dt, a finer mesh lets strands creep through sticking
+    /// contacts and the knot drifts along the rod.
+    pub fn time_step(&self) -> f64 {
+        self.dt.unwrap_or_else(|| {
+            let edge = self.length / (self.nodes.max(2) - 1) as f64;
+            (REFERENCE_DT * (edge / REFERENCE_EDGE).powi(2)).min(1e-2)
+        })
+    }
+
+    /// Bending stiffness EI = (pi/4) E h^4 (eq. 11).
+    pub fn bending_stiffness(&self) -> f64 {
+        std::f64::consts::PI / 4.0 * self.youngs_modulus * self.h.powi(4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A validation pass that builds each distinct knot once gives every case
+    /// the verdict validating it alone gives, refusals included.
+    #[test]
+    fn shared_build_checks_give_the_verdicts_of_lone_validation() {
+        let cases: Vec<CaseParams> = [
+            (3, 301, 0.1),
+            (3, 101, 0.1),
+            (3, 301, 0.4),
+            (3, 101, 0.4),
+            (4, 301, 0.2),
+        ]
+        .into_iter()
+        .map(|(n, nodes, mu)| CaseParams {
+            n,
+            nodes,
+            mu,
+            ..CaseParams::default()
+        })
+        .collect();
+        let mut checks = BuildChecks::default();
+        for c in &cases {
+            assert_eq!(
+                c.validate_in(&mut checks),
+                c.validate(),
+                "n {} nodes {} mu {}",
+                c.n,
+                c.nodes,
+                c.mu
+            );
+        }
+        assert!(cases[1].validate().is_err(), "K = 101 is too coarse for n = 3");
+        assert_eq!(checks.0.len(), 3, "one build per distinct knot");
+    }
+
+    #[test]
+    fn defaults_are_valid_and_bad_fields_are_named() {
+        assert!(CaseParams::default().validate().is_ok());
+        let bad = CaseParams {
+            n: 0,
+            h: 0.05,
+            mu: -1.0,
+            ..CaseParams::default()
+        };
+        let errors = bad.validate().unwrap_err();
+        let fields: Vec<&str> = errors.iter().map(|e| e.field.as_str()).collect();
+        assert_eq!(fields, ["n", "h", "mu"]);
+    }
+
+    #[test]
+    fn automatic_time_step_scales_with_the_squared_edge() {
+        let paper = CaseParams::default();
+        assert!((paper.time_step() - REFERENCE_DT).abs() < 1e-15);
+        let finer = CaseParams {
+            nodes: 401,
+            ..CaseParams::default()
+        };
+        assert!((finer.time_step() - REFERENCE_DT * 0.75 * 0.75).abs() < 1e-15);
+        let given = CaseParams {
+            nodes: 401,
+            dt: Some(2e-3),
+            ..CaseParams::default()
+        };
+        assert_eq!(given.time_step(), 2e-3);
+        let coarse = CaseParams {
+            nodes: 51,
+            ..CaseParams::default()
+        };
+        assert_eq!(coarse.time_step(), 1e-2);
+    }
+
+    /// The builder's own knot is a valid start shape; each broken variant is
+    /// refused with its reason.
+    #[test]
+    fn initial_shape_is_checked_like_a_built_knot() {
+        let built = CaseParams::default().start_shape().unwrap();
+        let points: Vec<[f64; 3]> = built.points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let with = |pts: Vec<[f64; 3]>| CaseParams {
+            initial_shape: Some(pts),
+            ..CaseParams::default()
+        };
+        let ok = with(points.clone());
+        assert!(ok.validate().is_ok(), "{:?}", ok.validate());
+        assert_eq!(ok.start_shape().unwrap().points, built.points);
+        let reason = |p: CaseParams| {
+            let errors = p.validate().unwrap_err();
+            assert_eq!(errors[0].field, "initial_shape");
+            errors[0].reason.clone()
+        };
+        assert!(reason(with(points[..300].to_vec())).contains("300 points, but nodes = 301"));
+        let mut nan = points.clone();
+        nan[7][1] = f64::NAN;
+        assert!(reason(with(nan)).contains("point 7 is not finite"));
+        let long: Vec<[f64; 3]> = points
+            .iter()
+            .map(|p| [1.1 * p[0], 1.1 * p[1], 1.1 * p[2]])
+            .collect();
+        assert!(reason(with(long)).contains("long, but length = 1 m"));
+        let mut beyond = points.clone();
+        beyond.swap(0, 1);
+        assert!(reason(with(beyond)).contains("beyond an end"));
+        // Nudge a braid node by h towards the nearest node of another strand.
+        let mut close = points.clone();
+        let (i, j) = (0..points.len())
+            .flat_map(|i| (i + 10..points.len()).map(move |j| (i, j)))
+            .min_by(|a, b| {
+                let d = |(i, j): (usize, usize)| (built.points[i] - built.points[j]).norm();
+                d(*a).total_cmp(&d(*b))
+            })
+            .unwrap();
+        let towards = (built.points[j] - built.points[i]).normalize() * CaseParams::default().h;
+        close[i] = (built.points[i] + towards).into();
+        assert!(reason(with(close)).contains("closer than 2h"));
+        let wrong_n = CaseParams { n: 2, ..with(points) };
+        assert!(reason(wrong_n).contains("knot determinant 7, but an overhand knot with n = 2 passes has 5"));
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected() {
+        let r: Result<CaseParams, _> = serde_json::from_str(r#"{"n": 3, "radius": 0.001}"#);
+        assert!(r.is_err());
+        let p: CaseParams = serde_json::from_str(r#"{"n": 4}"#).unwrap();
+        assert_eq!(p.n, 4);
+        assert_eq!(p.h, 1.6e-3);
+    }
+}

@@ -1,0 +1,562 @@
+//! `CaseParams` and its table, [`PARAMETERS`]: each parameter's unit,
+//! default, range, paper value and documentation, written once.
+use super::table::{Bound, Parameter, Range, UNCHECKED, Value};
+use super::{Candidates, ContactSolve, FrictionLaw, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol};
+use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of one overhand-knot tightening case, SI units; [`PARAMETERS`]
+/// documents every field.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CaseParams {
+    /// Passes n.
+    pub n: u32,
+    /// Rod radius h (m).
+    pub h: f64,
+    /// Friction coefficient mu.
+    pub mu: f64,
+    /// Friction's admissible forces.
+    pub friction_law: FrictionLaw,
+    /// Friction at the surfaces (rods roll) or at the centre lines.
+    pub rolling: bool,
+    /// How contact forces see the rods' response.
+    pub contact_solve: ContactSolve,
+    /// Which pairs get a contact force.
+    pub contact_candidates: Candidates,
+    /// Start twist (turns); `None`: the paper's code's.
+    pub start_twist: Option<f64>,
+    /// Gravitational acceleration (m/s^2).
+    pub gravity: [f64; 3],
+    /// Rod length L (m).
+    pub length: f64,
+    /// Node count K.
+    pub nodes: usize,
+    /// Young's modulus E (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio nu.
+    pub poisson_ratio: f64,
+    /// Density rho (kg/m^3).
+    pub density: f64,
+    /// Clamp speed (m/s).
+    pub pull_speed: f64,
+    /// Pull schedule.
+    pub protocol: Protocol,
+    /// (Largest) time step (s); `None`: [`CaseParams::time_step`]'s.
+    pub dt: Option<f64>,
+    /// Adaptive time step.
+    pub adaptive_dt: bool,
+    /// Contact solve's relative tolerance.
+    pub contact_tolerance: f64,
+    /// Longest relaxation (s).
+    pub relax_time: f64,
+    /// Relaxation's kinetic-to-elastic energy ratio.
+    pub relax_tolerance: f64,
+    /// Damping rate while pulling (1/s).
+    pub damping: f64,
+    /// Initial clamp-to-clamp distance (m).
+    pub end_to_end: Option<f64>,
+    /// Braid pass strand length (m).
+    pub braid_length: Option<f64>,
+    /// Sampling interval in l_k bar.
+    pub sample_interval: f64,
+    /// Stop below this l_k bar.
+    pub min_l_k_bar: f64,
+    /// Stop this far in l_k bar past the inversion.
+    pub stop_after_inversion: Option<f64>,
+    /// Stop above this F bar.
+    pub max_force_bar: Option<f64>,
+    /// The user's start shape (m), checked by [`crate::knot::checked_start`].
+    pub initial_shape: Option<Vec<[f64; 3]>>,
+}
+
+impl Default for CaseParams {
+    fn default() -> Self {
+        Self {
+            n: 3,
+            h: 1.6e-3,
+            mu: 0.1,
+            friction_law: FrictionLaw::default(),
+            rolling: false,
+            contact_solve: ContactSolve::default(),
+            contact_candidates: Candidates::default(),
+            start_twist: None,
+            gravity: [0.0; 3],
+            length: 1.0,
+            nodes: 301,
+            youngs_modulus: 1.8e6,
+            poisson_ratio: 0.5,
+            density: 1000.0,
+            pull_speed: 3e-3,
+            protocol: Protocol::default(),
+            dt: None,
+            adaptive_dt: true,
+            contact_tolerance: 1e-6,
+            relax_time: 2.0,
+            relax_tolerance: 1e-4,
+            damping: 0.0,
+            end_to_end: None,
+            braid_length: None,
+            sample_interval: 0.5,
+            min_l_k_bar: 60.0,
+            stop_after_inversion: Some(10.0),
+            max_force_bar: None,
+            initial_shape: None,
+        }
+    }
+}
+
+const fn closed(lo: f64, hi: f64) -> Range {
+    Range::Interval(Bound::Closed(lo), Bound::Closed(hi))
+}
+
+/// Every `CaseParams` field, documented once.
+pub const PARAMETERS: &[Parameter] = &[
+    Parameter {
+        name: "n",
+        unit: "",
+        default: "3",
+        range: Range::Integers(1, MAX_PASSES as u64),
+        null: None,
+        paper: "",
+        doc: "Number of passes (unknotting number) of the overhand knot.",
+        value: |p| Some(Value::Integer(u64::from(p.n))),
+    },
+    Parameter {
+        name: "h",
+        unit: "m",
+        default: "1.6e-3",
+        range: Range::LengthOver(
+            Bound::Closed(MIN_RADIUS_DIVISOR),
+            Bound::Open(1.0 / MAX_RADIUS_RATIO),
+        ),
+        null: None,
+        paper: "1.6 mm",
+        doc: "Rod radius h, from L/16000 (the knot builder's edges of at most 4h within 4001 nodes) to below L/50 \
+              (a knot needs room in L).",
+        value: |p| Some(Value::Number(p.h)),
+    },
+    Parameter {
+        name: "mu",
+        unit: "",
+        default: "0.1",
+        range: closed(0.0, 2.0),
+        null: None,
+        paper: "0.1",
+        doc: "Coulomb friction coefficient.",
+        value: |p| Some(Value::Number(p.mu)),
+    },
+    Parameter {
+        name: "friction_law",
+        unit: "",
+        default: "\"isotropic\"",
+        range: Range::Words(&["isotropic", "sliding_direction"]),
+        null: None,
+        paper: "",
+        doc: "Which tangential forces friction may take (eqs. 9-10): \"isotropic\", Coulomb's disk |F_t| <= mu F_n, \
+              or \"sliding_direction\", only along the previous step's sliding direction (fails the capstan check, \
+              kept for sensitivity studies, docs/FIDELITY.md).",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "rolling",
+        unit: "",
+        default: "false",
+        range: Range::Flag,
+        null: None,
+        paper: "false",
+        doc: "Friction acts at the rods' surfaces: a contact's slip includes each rod's spin about its axis and \
+              friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g \
+              sin alpha). false: friction at the centre lines, as in the paper's method and code; with the paper's \
+              start twist it reproduces Fig. 1 (n = 3 inverts at l_k bar 136.4, n = 4 at 213.5; the paper's code \
+              148 +- 2 and 215 +- 2; the experiments' brackets hold both), Fig. 7 (h invariance), Fig. 9 (growth \
+              with n) and Fig. 11 (l_k bar grows with mu at h = 3.4 mm, with a clean snap at every mu 0.1-0.7). \
+              true: n = 3 inverts at 124.3, n = 4 at 193.3 with the start twist, and the clean snap at h = 3.4 mm \
+              is lost for mu >= 0.4 (docs/FIDELITY.md).",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "contact_solve",
+        unit: "",
+        default: "\"explicit\"",
+        range: Range::Words(&["explicit", "implicit"]),
+        null: None,
+        paper: "\"explicit\"",
+        doc: "How each step's contact forces see the rods' response: \"explicit\" (the paper's method: free \
+              velocities v + dt M^-1 F and the mass-only Delassus operator, the forces then held fixed in the \
+              implicit step) or \"implicit\" (the free velocities of a contact-free implicit step and the Delassus \
+              operator of its Newton matrix, so a sticking contact holds for the motion the step takes, without \
+              creep; a banded solve per contact axis each step: about 18 ms per step against 0.3 ms for \
+              \"explicit\" at n = 3, K = 301).",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "contact_candidates",
+        unit: "",
+        default: "\"detected\"",
+        range: Range::Words(&["detected", "predicted"]),
+        null: None,
+        paper: "\"predicted\" (the code)",
+        doc: "Which segment pairs get a contact force each step: \"detected\" (every pair within reach at the start \
+              of the step, one of two pairs meeting at a shared node) or \"predicted\" (as the paper's code: only \
+              the pairs that a contact-free implicit predictor step brings closer than 2h, so a touching pair that \
+              the predictor pulls apart gets no force in that step; a second Newton solve per step). \"predicted\" \
+              with dt 1 ms fixed (adaptive_dt false) and the reference protocol tracks the paper's code's n = 4 \
+              curve (inversion at l_k bar 215.3 against 215 +- 2, F bar within 1-4 %); n = 3 inverts at 134.8 \
+              against 148.",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "start_twist",
+        unit: "turns",
+        default: "null",
+        range: closed(-20.0, 20.0),
+        null: Some(
+            "the paper's code's, which gives the rod the linking number 2n with the pull axis (sign of the \
+             knot's writhe)",
+        ),
+        paper: "null (the code)",
+        doc: "Twist the knot starts with between its clamps, spread evenly along the rod. The paper's code's is \
+              about +1.0 to +1.3 turns for the builder's knots n = 1..5 (writhe -3.0 to -11.3); 0: none, as if the \
+              knot's ends had turned freely while it was tied (n = 3 then inverts at l_k bar 150.5, n = 4 at \
+              244.0). The report gives the twist used and the knot's writhe.",
+        value: |p| p.start_twist.map(Value::Number),
+    },
+    Parameter {
+        name: "gravity",
+        unit: "m/s^2",
+        default: "[0.0, 0.0, 0.0]",
+        range: Range::Components(-1e3, 1e3),
+        null: None,
+        paper: "[0, 0, 0]",
+        doc: "Gravitational acceleration, a vector; the pull is along x.",
+        value: |p| Some(Value::Vector(p.gravity)),
+    },
+    Parameter {
+        name: "length",
+        unit: "m",
+        default: "1.0",
+        range: closed(0.05, 100.0),
+        null: None,
+        paper: "1 m",
+        doc: "Rod length L.",
+        value: |p| Some(Value::Number(p.length)),
+    },
+    Parameter {
+        name: "nodes",
+        unit: "",
+        default: "301",
+        range: Range::Integers(51, MAX_NODES as u64),
+        null: None,
+        paper: "301",
+        doc: "Node count K (the knot builder needs edges of at most 4h).",
+        value: |p| Some(Value::Integer(p.nodes as u64)),
+    },
+    Parameter {
+        name: "youngs_modulus",
+        unit: "Pa",
+        default: "1.8e6",
+        range: closed(1e3, 1e12),
+        null: None,
+        paper: "1.8 MPa",
+        doc: "Young's modulus E.",
+        value: |p| Some(Value::Number(p.youngs_modulus)),
+    },
+    Parameter {
+        name: "poisson_ratio",
+        unit: "",
+        default: "0.5",
+        range: closed(0.0, 0.5),
+        null: None,
+        paper: "0.5",
+        doc: "Poisson's ratio nu.",
+        value: |p| Some(Value::Number(p.poisson_ratio)),
+    },
+    Parameter {
+        name: "density",
+        unit: "kg/m^3",
+        default: "1000.0",
+        range: closed(1.0, 1e5),
+        null: None,
+        paper: "1000 (the code)",
+        doc: "Density rho.",
+        value: |p| Some(Value::Number(p.density)),
+    },
+    Parameter {
+        name: "pull_speed",
+        unit: "m/s",
+        default: "3e-3",
+        range: closed(1e-5, 1.0),
+        null: None,
+        paper: "1 mm/s (the text), 3 mm/s (the code)",
+        doc: "Pulling speed of each clamp.",
+        value: |p| Some(Value::Number(p.pull_speed)),
+    },
+    Parameter {
+        name: "protocol",
+        unit: "",
+        default: "\"reference\"",
+        range: Range::Words(&["reference", "adaptive"]),
+        null: None,
+        paper: "\"reference\"",
+        doc: "How the clamps move: \"reference\" pulls at pull_speed throughout, as in the paper. \"adaptive\" ramps \
+              up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far \
+              from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the \
+              checkpoint 10 before it (further if the knot then snaps within 2), lets the knot settle and pulls \
+              through the snap at pull_speed; above mu = 0.2 it pulls as \"reference\" does, since there the \
+              result depends on the pulling path. Its inversion lies within 1 % of the reference's at a tenth of \
+              the cost, but its fast approach reads F bar 5-20 % high (BENCHMARKS.md, \"Pull protocols\"): a quick \
+              look, not the curves.",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "dt",
+        unit: "s",
+        default: "null",
+        range: closed(1e-6, 1e-2),
+        null: Some(
+            "0.5 ms (half the paper's code's 1 ms, converged within 0.4 %) at L = 1 m, K = 301, scaled with the \
+             square of the edge length L/(K-1), at most 1e-2 s",
+        ),
+        paper: "1 ms (the code)",
+        doc: "Time step; with adaptive_dt the largest step.",
+        value: |p| p.dt.map(Value::Number),
+    },
+    Parameter {
+        name: "adaptive_dt",
+        unit: "",
+        default: "true",
+        range: Range::Flag,
+        null: None,
+        paper: "false",
+        doc: "Halve the step (down to dt/64) while contacts penetrate and grow it back when calm; false: the \
+              constant dt of the paper's scheme.",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "contact_tolerance",
+        unit: "",
+        default: "1e-6",
+        range: closed(1e-12, 1e-3),
+        null: None,
+        paper: "",
+        doc: "Relative tolerance of each step's frictional contact solve (projected Gauss-Seidel): the forces are \
+              accepted when a sweep changes none by more than this times the largest, or the natural-map residual \
+              is this small (at most 200 sweeps).",
+        value: |p| Some(Value::Number(p.contact_tolerance)),
+    },
+    Parameter {
+        name: "relax_time",
+        unit: "s",
+        default: "2.0",
+        range: closed(0.0, 100.0),
+        null: None,
+        paper: "",
+        doc: "Longest relaxation with the ends held before pulling.",
+        value: |p| Some(Value::Number(p.relax_time)),
+    },
+    Parameter {
+        name: "relax_tolerance",
+        unit: "",
+        default: "1e-4",
+        range: closed(0.0, 1.0),
+        null: None,
+        paper: "",
+        doc: "Relaxation ends when the kinetic energy falls below this times the elastic energy.",
+        value: |p| Some(Value::Number(p.relax_tolerance)),
+    },
+    Parameter {
+        name: "damping",
+        unit: "1/s",
+        default: "0.0",
+        range: closed(0.0, 1e4),
+        null: None,
+        paper: "",
+        doc: "Mass-proportional viscous damping rate while pulling.",
+        value: |p| Some(Value::Number(p.damping)),
+    },
+    Parameter {
+        name: "end_to_end",
+        unit: "m",
+        default: "null",
+        range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(1.0)),
+        null: Some("the knot builder's default for n"),
+        paper: "",
+        doc: "Initial clamp-to-clamp distance.",
+        value: |p| p.end_to_end.map(Value::Number),
+    },
+    Parameter {
+        name: "braid_length",
+        unit: "m",
+        default: "null",
+        range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(2.0)),
+        null: Some("the knot builder's default"),
+        paper: "",
+        doc: "Strand length of a braid pass in the initial shape.",
+        value: |p| p.braid_length.map(Value::Number),
+    },
+    Parameter {
+        name: "sample_interval",
+        unit: "",
+        default: "0.5",
+        range: closed(1e-3, 100.0),
+        null: None,
+        paper: "",
+        doc: "Series sampling interval in l_k bar.",
+        value: |p| Some(Value::Number(p.sample_interval)),
+    },
+    Parameter {
+        name: "min_l_k_bar",
+        unit: "",
+        default: "60.0",
+        range: closed(0.0, 1e6),
+        null: None,
+        paper: "",
+        doc: "Stop when l_k bar falls below this.",
+        value: |p| Some(Value::Number(p.min_l_k_bar)),
+    },
+    Parameter {
+        name: "stop_after_inversion",
+        unit: "",
+        default: "10.0",
+        range: closed(0.0, 1e6),
+        null: Some("never early"),
+        paper: "",
+        doc: "Stop this far in l_k bar past a detected inversion.",
+        value: |p| p.stop_after_inversion.map(Value::Number),
+    },
+    Parameter {
+        name: "max_force_bar",
+        unit: "",
+        default: "null",
+        range: Range::Interval(Bound::Open(0.0), Bound::Open(f64::INFINITY)),
+        null: Some("never"),
+        paper: "",
+        doc: "Stop when F bar exceeds this (the knot is tight).",
+        value: |p| p.max_force_bar.map(Value::Number),
+    },
+    Parameter {
+        name: "initial_shape",
+        unit: "m",
+        default: "null",
+        range: Range::Points,
+        null: Some("the builder's knot"),
+        paper: "",
+        doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
+              1 %), every node between the ends along the line joining them (the clamps hold the first and last \
+              points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass \
+              overhand knot. Mind the body limit (64 KiB by default: about 700 points).",
+        value: UNCHECKED,
+    },
+];
+
+impl CaseParams {
+    /// A knot builder's refusal as the error of the parameter to change.
+    fn knot_error(&self, e: KnotError) -> ParamError {
+        let braid_or_h = if self.braid_length.is_some() {
+            "braid_length"
+        } else {
+            "h"
+        };
+        let field = match &e {
+            KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => "n",
+            KnotError::InvalidParameter { name, .. } => match *name {
+                "radius" => "h",
+                "clamp_span" => "end_to_end",
+                "pass_length" => "braid_length",
+                other => other,
+            },
+            KnotError::RadiusTooLarge { .. } | KnotError::Clearance { .. } => "h",
+            KnotError::TooFewNodes { .. } => "nodes",
+            KnotError::BraidTooShort { .. }
+            | KnotError::TailsTooShort { .. }
+            | KnotError::Infeasible { .. } => braid_or_h,
+            KnotError::EndToEndOutOfRange { .. } => "end_to_end",
+        };
+        let mut reason = format!("the knot cannot be built: {e}");
+        if let KnotError::TooFewNodes { min, .. } = e
+            && min > MAX_NODES
+        {
+            reason.push_str(&format!(
+                " (more than the {MAX_NODES} allowed: use a larger h or a shorter length)"
+            ));
+        }
+        ParamError {
+            field: field.to_string(),
+            reason,
+        }
+    }
+
+    /// The shape the case starts from: `initial_shape`, checked
+    /// ([`knot::checked_start`]), or the knot builder's ([`knot::build`]
+    /// itself, so that a case accepted by [`CaseParams::validate`] can always
+    /// start); a failure names the parameter to change.
+    pub(super) fn start_shape(&self) -> Result<StartShape, ParamError> {
+        match &self.initial_shape {
+            Some(points) => knot::checked_start(&self.knot_spec(), points).map_err(|reason| ParamError {
+                field: "initial_shape".to_string(),
+                reason,
+            }),
+            None => knot::built_start(&self.knot_spec()).map_err(|e| self.knot_error(e)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::{Value as Json, json};
+
+    /// The table lists every field once, in the order of the struct, and
+    /// each entry's default is the field's.
+    #[test]
+    fn the_table_holds_every_field_and_its_default() {
+        let defaults = serde_json::to_value(CaseParams::default()).unwrap();
+        let Json::Object(fields) = &defaults else { panic!() };
+        let names: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
+        let mut sorted = names.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), names.len(), "a parameter listed twice");
+        assert_eq!(sorted, fields.keys().map(String::as_str).collect::<Vec<_>>());
+        for p in PARAMETERS {
+            let default: Json = serde_json::from_str(p.default).unwrap();
+            assert_eq!(default, fields[p.name], "{}", p.name);
+        }
+    }
+
+    /// Each word of a word range is accepted; a null may be given exactly
+    /// where the table says so.
+    #[test]
+    fn words_and_nulls_are_what_serde_accepts() {
+        for p in PARAMETERS {
+            if let Range::Words(words) = p.range {
+                for w in words {
+                    let r: Result<CaseParams, _> = serde_json::from_value(json!({ p.name: w }));
+                    assert!(r.is_ok(), "{} = {w}", p.name);
+                }
+            }
+            let null: Result<CaseParams, _> = serde_json::from_value(json!({ p.name: null }));
+            assert_eq!(null.is_ok(), p.null.is_some(), "{} = null", p.name);
+        }
+    }
+
+    /// Every range check reads a value of its kind: defaults and every
+    /// optional number set are checked without a mismatch, and pass.
+    #[test]
+    fn every_range_reads_its_kind_of_value() {
+        let set = CaseParams {
+            start_twist: Some(0.0),
+            dt: Some(1e-3),
+            end_to_end: Some(0.3),
+            braid_length: Some(0.2),
+            stop_after_inversion: Some(5.0),
+            max_force_bar: Some(1.0),
+            ..CaseParams::default()
+        };
+        for p in PARAMETERS {
+            assert_eq!(p.check(&CaseParams::default()), None, "{}", p.name);
+            assert_eq!(p.check(&set), None, "{}", p.name);
+        }
+    }
+}

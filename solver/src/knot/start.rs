@@ -1,0 +1,102 @@
+//! The shape a case starts from: the builder's knot, or a user's points
+//! checked like one.
+use super::builder::{KnotError, KnotShape, KnotSpec, build};
+use super::topology::{expected_determinant, knot_determinant};
+use crate::contact::broad_phase::neighbour_gap;
+use crate::contact::segment::closest_points;
+use nalgebra::Vector3;
+
+/// The shape a case starts from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartShape {
+    pub points: Vec<Vector3<f64>>,
+    /// A node in the middle of the knot's loop (where the braid search starts).
+    pub loop_middle: usize,
+}
+
+/// The builder's knot for `spec`, with the middle of its loop.
+pub fn built_start(spec: &KnotSpec) -> Result<StartShape, KnotError> {
+    build(spec).map(|shape: KnotShape| StartShape {
+        loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
+        points: shape.points,
+    })
+}
+
+/// A user's start shape for `spec` (its `n`, `length`, `nodes` and `radius`
+/// h): `nodes` finite points, a polyline of length `length` (within 1 %),
+/// every node between the two ends along the line joining them (the clamps
+/// hold the ends), no two non-neighbouring segments closer than 2h, and the
+/// knot type of an n-pass overhand knot. The error is the reason, in words.
+pub fn checked_start(spec: &KnotSpec, points: &[[f64; 3]]) -> Result<StartShape, String> {
+    if points.len() != spec.nodes {
+        return Err(format!(
+            "{} points, but nodes = {}: give one point per node",
+            points.len(),
+            spec.nodes
+        ));
+    }
+    if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+        return Err(format!("point {i} is not finite"));
+    }
+    let points: Vec<Vector3<f64>> = points.iter().map(|p| Vector3::from(*p)).collect();
+    let edges: Vec<f64> = points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+    if let Some(i) = edges.iter().position(|&e| e <= 0.0) {
+        return Err(format!("points {i} and {} coincide", i + 1));
+    }
+    let total: f64 = edges.iter().sum();
+    if (total - spec.length).abs() > 0.01 * spec.length {
+        return Err(format!(
+            "the polyline is {total:.4} m long, but length = {} m (within 1 %)",
+            spec.length
+        ));
+    }
+    check_between_ends(&points)?;
+    check_clearance(&points, &edges, spec.radius)?;
+    let expected = expected_determinant(spec.n);
+    match knot_determinant(&points) {
+        Ok(d) if d == expected => Ok(StartShape {
+            loop_middle: points.len() / 2,
+            points,
+        }),
+        Ok(d) => Err(format!(
+            "knot determinant {d}, but an overhand knot with n = {} passes has {expected}",
+            spec.n
+        )),
+        Err(e) => Err(format!("knot type undetermined: {e}")),
+    }
+}
+
+/// Every node lies between the two ends along the line joining them.
+fn check_between_ends(points: &[Vector3<f64>]) -> Result<(), String> {
+    let (first, last) = (points[0], points[points.len() - 1]);
+    let span = (last - first).norm();
+    let axis = (last - first) / span;
+    match points.iter().position(|p| {
+        let s = (p - first).dot(&axis);
+        s < -1e-9 * span || s > span * (1.0 + 1e-9)
+    }) {
+        Some(i) => Err(format!(
+            "point {i} lies beyond an end along the line joining the ends: the clamps hold the \
+             first and last points and pull them apart along that line"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// No two non-neighbouring segments closer than 2h (`radius` h).
+fn check_clearance(points: &[Vector3<f64>], edges: &[f64], radius: f64) -> Result<(), String> {
+    let shortest = edges.iter().cloned().fold(f64::INFINITY, f64::min);
+    let gap = neighbour_gap(2.0 * radius, shortest);
+    for i in 0..edges.len() {
+        for j in i + gap + 1..edges.len() {
+            let d = closest_points(&points[i], &points[i + 1], &points[j], &points[j + 1]).distance;
+            if d < 2.0 * radius * (1.0 - 1e-6) {
+                return Err(format!(
+                    "segments {i} and {j} are {d:.3e} m apart, closer than 2h = {:.3e} m",
+                    2.0 * radius
+                ));
+            }
+        }
+    }
+    Ok(())
+}

@@ -171,8 +171,8 @@ pub const PARAMETERS: &[Parameter] = &[
               start twist it reproduces Fig. 1 (n = 3 inverts at l_k bar 136.4, n = 4 at 213.5; the paper's code \
               148 +- 2 and 215 +- 2; the experiments' brackets hold both), Fig. 7 (h invariance), Fig. 9 (growth \
               with n) and Fig. 11 (l_k bar grows with mu at h = 3.4 mm, with a clean snap at every mu 0.1-0.7). \
-              true: n = 3 inverts at 124.3, n = 4 at 193.3 with the start twist, and the clean snap at h = 3.4 mm \
-              is lost for mu >= 0.4 (docs/FIDELITY.md).",
+              true: n = 3 inverts at 124.9, n = 4 at 193.0 with the start twist, and at h = 3.4 mm F bar no \
+              longer falls through the events at mu = 0.4 and 0.7 (docs/FIDELITY.md).",
         value: UNCHECKED,
     },
     Parameter {
@@ -202,7 +202,7 @@ pub const PARAMETERS: &[Parameter] = &[
               the pairs that a contact-free implicit predictor step brings closer than 2h, so a touching pair that \
               the predictor pulls apart gets no force in that step; a second Newton solve per step). \"predicted\" \
               with dt 1 ms fixed (adaptive_dt false) and the reference protocol tracks the paper's code's n = 4 \
-              curve (inversion at l_k bar 215.3 against 215 +- 2, F bar within 1-4 %); n = 3 inverts at 134.8 \
+              curve (inversion at l_k bar 213.7 against 215 +- 2, F bar within 4 %); n = 3 inverts at 131.8 \
               against 148.",
         value: UNCHECKED,
     },
@@ -218,8 +218,8 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "null (the code)",
         doc: "Twist the knot starts with between its clamps, spread evenly along the rod. The paper's code's is \
               about +1.0 to +1.3 turns for the builder's knots n = 1..5 (writhe -3.0 to -11.3); 0: none, as if the \
-              knot's ends had turned freely while it was tied (n = 3 then inverts at l_k bar 150.5, n = 4 at \
-              244.0). The report gives the twist used and the knot's writhe.",
+              knot's ends had turned freely while it was tied (n = 3 then inverts at l_k bar 150.4, n = 4 at \
+              245.5). The report gives the twist used and the knot's writhe.",
         value: |p| p.start_twist.map(Value::Number),
     },
     Parameter {

@@ -160,12 +160,13 @@ pub fn natural_map_residual(r: &Vector3<f64>, u: &Vector3<f64>, mu: f64, rho: f6
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
 
-    fn random_vector(rng: &mut StdRng, scale: f64) -> Vector3<f64> {
+    /// A vector with components uniform in (-scale, scale).
+    pub(crate) fn random_vector(rng: &mut StdRng, scale: f64) -> Vector3<f64> {
         Vector3::new(
             rng.gen_range(-scale..scale),
             rng.gen_range(-scale..scale),

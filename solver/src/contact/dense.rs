@@ -157,17 +157,10 @@ fn largest_eigenvalue(a: f64, b: f64, c: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::cone::tests::random_vector;
     use crate::contact::cone::{solve_isotropic, tangential};
     use rand::rngs::StdRng;
     use rand::{Rng, SeedableRng};
-
-    fn random_vector(rng: &mut StdRng, scale: f64) -> Vector3<f64> {
-        Vector3::new(
-            rng.gen_range(-scale..scale),
-            rng.gen_range(-scale..scale),
-            rng.gen_range(-scale..scale),
-        )
-    }
 
     /// A random SPD Delassus operator `G^T G + eps I` of `m` contacts, by blocks.
     fn random_delassus(rng: &mut StdRng, m: usize) -> Vec<Matrix3<f64>> {

@@ -611,19 +611,12 @@ mod tests {
     use crate::contact::broad_phase::polyline_segments;
     use crate::contact::broad_phase::tests::torus_knot;
     use crate::contact::broad_phase::{BroadPhase, neighbour_gap};
+    use crate::contact::cone::tests::random_vector;
     use crate::contact::cone::{solve_isotropic, tangential};
     use crate::contact::segment::closest_points;
     use rand::rngs::StdRng;
     use rand::seq::SliceRandom;
     use rand::{Rng, SeedableRng};
-
-    fn random_vector(rng: &mut StdRng, scale: f64) -> Vector3<f64> {
-        Vector3::new(
-            rng.gen_range(-scale..scale),
-            rng.gen_range(-scale..scale),
-            rng.gen_range(-scale..scale),
-        )
-    }
 
     /// Contact between segments `(nodes[0], nodes[1])` (A) and
     /// `(nodes[2], nodes[3])` (B) of the node array `x`.

@@ -186,8 +186,8 @@ pub const PARAMETERS: &[Parameter] = &[
               velocities v + dt M^-1 F and the mass-only Delassus operator, the forces then held fixed in the \
               implicit step) or \"implicit\" (the free velocities of a contact-free implicit step and the Delassus \
               operator of its Newton matrix, so a sticking contact holds for the motion the step takes, without \
-              creep; a banded solve per contact axis each step: about 18 ms per step against 0.3 ms for \
-              \"explicit\" at n = 3, K = 301).",
+              creep; a banded solve per contact axis each step: about 45 times the cost per step, 5.9 ms against \
+              0.13 ms at n = 3, K = 301, BENCHMARKS.md).",
         value: UNCHECKED,
     },
     Parameter {

@@ -70,10 +70,10 @@ pub const MAX_NODES: usize = 4001;
 pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
 
 /// The default (largest) time step (s) at the paper's edge length
-/// [`REFERENCE_EDGE`]: half the paper's code's 1 ms. With rods that roll, the
-/// inversion at 1 ms differs by 1.5 % from the converged one, while 0.5 ms
-/// agrees with 0.25 ms within 0.4 % (n = 3: 139.8, 137.4, 137.9; n = 4:
-/// 226.7, 223.0, 223.0 at 1, 0.5, 0.25 ms; docs/FIDELITY.md).
+/// [`REFERENCE_EDGE`]: half the paper's code's 1 ms. With the defaults, n = 3
+/// at 0.25 ms inverts within 0.37 % of 0.5 ms (docs/VALIDATION.md, the
+/// convergence rows); with rods that roll (revision 2), 1 ms was 1.5 % off the
+/// converged inversion (n = 3: 139.8, 137.4, 137.9 at 1, 0.5, 0.25 ms).
 pub const REFERENCE_DT: f64 = 5e-4;
 /// The paper's edge length (m): L = 1 m with K = 301 nodes.
 pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;

@@ -17,7 +17,7 @@
 //! over a full turn read a tension ratio of 4.77 with omega = 1.5 and 6.53 with
 //! plain Gauss-Seidel, against exp(mu phi) = 6.59).
 use super::cone::{natural_map_residual, project_coulomb};
-use super::gauss_seidel::{GaussSeidelOptions, SolveReport};
+use super::gauss_seidel::{GaussSeidelOptions, SolveReport, largest_eigenvalue};
 use nalgebra::{Matrix3, Vector3};
 
 /// The contact problem in local frames.
@@ -61,7 +61,7 @@ impl DenseGaussSeidel {
         self.rho.clear();
         self.rho.extend((0..m).map(|c| {
             let b = &p.w[c * m + c];
-            let tangential = largest_eigenvalue(b[(1, 1)], b[(1, 2)], b[(2, 2)]);
+            let tangential = largest_eigenvalue([b[(1, 1)], b[(1, 2)], b[(2, 2)]]);
             if b[(0, 0)] > 0.0 && tangential > 0.0 {
                 (1.0 / b[(0, 0)], 1.0 / tangential)
             } else {
@@ -147,11 +147,6 @@ fn add_column(w: &[Matrix3<f64>], m: usize, c: usize, x: &Vector3<f64>, u: &mut 
     for (ud, block) in u.iter_mut().zip(&w[c * m..(c + 1) * m]) {
         *ud += block.tr_mul(x);
     }
-}
-
-/// Largest eigenvalue of the symmetric 2 x 2 matrix `[[a, b], [b, c]]`.
-fn largest_eigenvalue(a: f64, b: f64, c: f64) -> f64 {
-    0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
 }
 
 #[cfg(test)]

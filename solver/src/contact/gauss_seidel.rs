@@ -528,7 +528,7 @@ fn gather(contact: &ContactPoint, x: &[Vector3<f64>]) -> Vector3<f64> {
 
 /// Largest eigenvalue of the symmetric 2x2 matrix with entries `(a, b, c)`
 /// = `[[a, b], [b, c]]`.
-fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
+pub(super) fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
     0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt()
 }
 

@@ -19,7 +19,6 @@ use super::{World, WorldError, WorldStepReport};
 use crate::contact::cone::ContactFrame;
 use crate::contact::dense::{DenseGaussSeidel, DenseProblem};
 use crate::contact::gauss_seidel::ContactPoint;
-use crate::contact::segment::closest_points;
 use crate::contact::{Candidates, ContactSolve};
 use crate::rod::{Rod, RodState, node_dof, theta_dof};
 use crate::stepper::StepError;
@@ -42,6 +41,8 @@ pub(super) struct Buffers {
     start: Vec<RodState>,
     /// Generalised velocities of the contact-free step, all rods' DOFs in a row.
     velocity: Vec<f64>,
+    /// Each contact's local frame `(n, t1, t2)` this step.
+    frames: Vec<ContactFrame>,
     /// `A^-1 H`, one column (all DOFs) per contact axis.
     columns: Vec<f64>,
     w: Vec<Matrix3<f64>>,
@@ -176,25 +177,15 @@ impl World {
     /// positions bring closer than `r_a + r_b`; the others' pairs go to
     /// `implicit.dropped` (their penetration is still watched).
     fn keep_predicted(&mut self) {
-        let dropped = &mut self.implicit.dropped;
         let mut kept = 0;
         for k in 0..self.contacts.len() {
             let (i, j) = self.pair_ids[k];
-            let (sa, sb) = (&self.segments[i], &self.segments[j]);
-            let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
-            let d = closest_points(
-                &ra.node(sa.index),
-                &ra.node(sa.index + 1),
-                &rb.node(sb.index),
-                &rb.node(sb.index + 1),
-            )
-            .distance;
-            if d < sa.radius + sb.radius {
+            if self.penetration(i, j) > 0.0 {
                 self.contacts[kept] = self.contacts[k];
                 self.pair_ids[kept] = self.pair_ids[k];
                 kept += 1;
             } else {
-                dropped.push((i, j));
+                self.implicit.dropped.push((i, j));
             }
         }
         self.contacts.truncate(kept);
@@ -216,10 +207,10 @@ impl World {
         self.history.warm_start(&self.pair_ids, dt, &mut self.warm);
         b.warm.clear();
         b.warm.extend(
-            self.contacts
+            b.frames
                 .iter()
                 .zip(&self.warm)
-                .map(|(c, f)| ContactFrame::from_normal(&c.normal).to_local(f)),
+                .map(|(frame, f)| frame.to_local(f)),
         );
         let problem = DenseProblem {
             w: &b.w,
@@ -233,10 +224,10 @@ impl World {
         report.active_contacts = b.solver.forces().iter().filter(|r| r.x > 0.0).count();
         self.forces.clear();
         self.forces.extend(
-            self.contacts
+            b.frames
                 .iter()
                 .zip(b.solver.forces())
-                .map(|(c, r)| ContactFrame::from_normal(&c.normal).to_world(r)),
+                .map(|(frame, r)| frame.to_world(r)),
         );
         // The generalised contact forces, into the first column's room.
         let generalised = &mut b.columns[..b.velocity.len()];
@@ -258,15 +249,18 @@ impl World {
         true
     }
 
-    /// `A^-1 H` into `implicit.columns`, one column per contact axis (`n`,
-    /// `t1`, `t2`): `false` if some rod's factorisation is not this step's.
+    /// The contacts' frames into `implicit.frames` and `A^-1 H` into
+    /// `implicit.columns`, one column per contact axis (`n`, `t1`, `t2`):
+    /// `false` if some rod's factorisation is not this step's.
     fn compliance_columns(&mut self, dt: f64) -> bool {
         let b = &mut self.implicit;
         let ndof = b.velocity.len();
+        b.frames.clear();
+        b.frames
+            .extend(self.contacts.iter().map(|c| ContactFrame::from_normal(&c.normal)));
         b.columns.clear();
         b.columns.resize(3 * self.contacts.len() * ndof, 0.0);
-        for (c, contact) in self.contacts.iter().enumerate() {
-            let frame = ContactFrame::from_normal(&contact.normal);
+        for (c, (contact, frame)) in self.contacts.iter().zip(&b.frames).enumerate() {
             for (k, axis) in [frame.n, frame.t1, frame.t2].iter().enumerate() {
                 let column = &mut b.columns[(3 * c + k) * ndof..(3 * c + k + 1) * ndof];
                 b.numbering.scatter(contact, axis, column);
@@ -297,20 +291,15 @@ impl World {
         b.free.clear();
         b.mu.clear();
         b.sliding.clear();
-        let frames: Vec<ContactFrame> = self
-            .contacts
-            .iter()
-            .map(|c| ContactFrame::from_normal(&c.normal))
-            .collect();
         for (d, contact) in self.contacts.iter().enumerate() {
             for j in 0..3 {
                 let column = &b.columns[(3 * d + j) * ndof..(3 * d + j + 1) * ndof];
-                for (c, (other, frame)) in self.contacts.iter().zip(&frames).enumerate() {
+                for (c, (other, frame)) in self.contacts.iter().zip(&b.frames).enumerate() {
                     let local = frame.to_local(&b.numbering.gather(other, column)) / dt;
                     b.w[c * m + d].set_column(j, &local);
                 }
             }
-            let frame = &frames[d];
+            let frame = &b.frames[d];
             let mut free = frame.to_local(&b.numbering.gather(contact, &b.velocity));
             free.x += if self.contact.solver.close_gap {
                 contact.gap

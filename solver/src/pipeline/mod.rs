@@ -540,18 +540,21 @@ impl World {
 
     /// Largest penetration over the detected pairs at the current positions.
     fn max_penetration(&self) -> f64 {
-        let mut worst: f64 = 0.0;
-        for &(i, j) in self.pair_ids.iter().chain(&self.implicit.dropped) {
-            let (sa, sb) = (&self.segments[i], &self.segments[j]);
-            let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
-            let cp = closest_points(
-                &ra.node(sa.index),
-                &ra.node(sa.index + 1),
-                &rb.node(sb.index),
-                &rb.node(sb.index + 1),
-            );
-            worst = worst.max(sa.radius + sb.radius - cp.distance);
-        }
-        worst
+        let pairs = self.pair_ids.iter().chain(&self.implicit.dropped);
+        pairs.fold(0.0, |worst: f64, &(i, j)| worst.max(self.penetration(i, j)))
+    }
+
+    /// How far segments `i` and `j` overlap at the current positions:
+    /// `r_a + r_b` minus their distance (negative when apart).
+    fn penetration(&self, i: usize, j: usize) -> f64 {
+        let (sa, sb) = (&self.segments[i], &self.segments[j]);
+        let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
+        let cp = closest_points(
+            &ra.node(sa.index),
+            &ra.node(sa.index + 1),
+            &rb.node(sb.index),
+            &rb.node(sb.index + 1),
+        );
+        sa.radius + sb.radius - cp.distance
     }
 }

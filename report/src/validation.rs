@@ -59,7 +59,7 @@ fn command(p: &CaseParams) -> String {
         (
             "friction-law",
             p.friction_law != d.friction_law,
-            word(&p.friction_law),
+            p.friction_law.to_string(),
         ),
         ("rolling", p.rolling != d.rolling, p.rolling.to_string()),
         (
@@ -70,14 +70,14 @@ fn command(p: &CaseParams) -> String {
         (
             "contact-candidates",
             p.contact_candidates != d.contact_candidates,
-            word(&p.contact_candidates),
+            p.contact_candidates.to_string(),
         ),
         (
             "contact-solve",
             p.contact_solve != d.contact_solve,
-            word(&p.contact_solve),
+            p.contact_solve.to_string(),
         ),
-        ("protocol", p.protocol != d.protocol, word(&p.protocol)),
+        ("protocol", p.protocol != d.protocol, p.protocol.to_string()),
         ("gravity", p.gravity != d.gravity, format!("{x},{y},{z}")),
     ];
     let mut s = String::from("knotsweep run");
@@ -87,14 +87,6 @@ fn command(p: &CaseParams) -> String {
         }
     }
     s
-}
-
-/// The word a parameter's enum value is spelled with (its serde name).
-fn word(value: &impl serde::Serialize) -> String {
-    serde_json::to_value(value)
-        .ok()
-        .and_then(|v| v.as_str().map(str::to_string))
-        .unwrap_or_default()
 }
 
 /// A job and its report by key.

@@ -12,7 +12,7 @@ use crate::pipeline::{ContactOptions, World, WorldStepReport};
 use crate::rod::{End, Rod};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
-use crate::words::serde_word;
+use crate::words::display_as_word;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -35,6 +35,8 @@ pub enum Status {
     Cancelled,
 }
 
+display_as_word!(Status, Stage);
+
 impl Status {
     /// Every solver status, in the order reports list them.
     pub const ALL: [Status; 6] = [
@@ -45,18 +47,6 @@ impl Status {
         Status::TopologyChanged,
         Status::Cancelled,
     ];
-}
-
-impl std::fmt::Display for Status {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        serde_word(self, f)
-    }
-}
-
-impl std::fmt::Display for Stage {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        serde_word(self, f)
-    }
 }
 
 /// [`Protocol::Adaptive`]: the largest friction coefficient it runs fast

@@ -7,7 +7,7 @@ mod table;
 
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{KnotSpec, StartShape};
-use crate::words::serde_word;
+use crate::words::display_as_word;
 pub use params::{CaseParams, PARAMETERS};
 use serde::{Deserialize, Serialize};
 pub use table::{Bound, Parameter, Range};
@@ -57,11 +57,7 @@ pub enum Protocol {
     Adaptive,
 }
 
-impl std::fmt::Display for Protocol {
-    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        serde_word(self, f)
-    }
-}
+display_as_word!(Protocol);
 
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;

@@ -6,6 +6,7 @@ pub mod gauss_seidel;
 pub mod narrow_phase;
 pub mod segment;
 
+use crate::words::display_as_word;
 use serde::{Deserialize, Serialize};
 
 /// Which tangential forces Coulomb's law admits at a contact (eqs. 9-10).
@@ -62,3 +63,5 @@ pub enum Candidates {
     /// predictor pulls apart gets no force in that step even if it touches.
     Predicted,
 }
+
+display_as_word!(FrictionLaw, ContactSolve, Candidates);

@@ -180,35 +180,18 @@ pub fn base_params(spec: &SweepSpec) -> Option<CaseParams> {
     serde_json::from_value(Value::Object(base)).ok()
 }
 
-/// Names of `CaseParams`'s fields (from its serialisation: no second list).
+/// Names of `CaseParams`'s fields (`solver::case::param_names`).
 pub fn param_names() -> Vec<String> {
-    match serde_json::to_value(CaseParams::default()) {
-        Ok(Value::Object(m)) => m.keys().cloned().collect(),
-        _ => Vec::new(),
-    }
+    solver::case::param_names()
 }
 
-/// `CaseParams` with one field set.
-fn with_one(name: &str, value: &Value) -> Result<CaseParams, serde_json::Error> {
-    let mut object = Map::new();
-    object.insert(name.to_string(), value.clone());
-    serde_json::from_value(Value::Object(object))
-}
-
-/// Unknown names and values of the wrong type in a partial `CaseParams`.
-fn check_object(prefix: &str, object: &Map<String, Value>, names: &[String]) -> Vec<FieldError> {
-    let mut errors = Vec::new();
-    for (name, value) in object {
-        if !names.contains(name) {
-            errors.push(FieldError::new(
-                format!("{prefix}.{name}"),
-                format!("unknown parameter; known: {}", names.join(", ")),
-            ));
-        } else if let Err(e) = with_one(name, value) {
-            errors.push(FieldError::new(format!("{prefix}.{name}"), e.to_string()));
-        }
-    }
-    errors
+/// Unknown names and values of the wrong type in a partial `CaseParams`
+/// (`solver::case::partial_errors`, the words the Python binding shows too).
+fn check_object(prefix: &str, object: &Map<String, Value>) -> Vec<FieldError> {
+    solver::case::partial_errors(object)
+        .into_iter()
+        .map(|e| FieldError::new(format!("{prefix}.{}", e.field), e.reason))
+        .collect()
 }
 
 /// Checks a spec against the limits and expands it into cases, or returns
@@ -219,7 +202,7 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     let names = param_names();
     let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
     if let Some(given) = &spec.base {
-        errors.extend(check_object("base", given, &names));
+        errors.extend(check_object("base", given));
         base.extend(given.clone());
     }
     let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
@@ -313,8 +296,8 @@ fn check_grid(
                     format!("duplicate value {v}"),
                 ));
             }
-            if let Err(e) = with_one(axis, v) {
-                errors.push(FieldError::new(format!("grid.{axis}[{i}]"), e.to_string()));
+            if let Some(reason) = solver::case::type_error(axis, v) {
+                errors.push(FieldError::new(format!("grid.{axis}[{i}]"), reason));
             }
         }
         axes.push((axis.clone(), values.clone()));

@@ -3,12 +3,14 @@
 //! the case to run ([`ValidCase`]), shared by the CLI, the API, the queue and
 //! the solver. SI units.
 mod params;
+mod partial;
 mod table;
 
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{KnotSpec, StartShape};
 use crate::words::display_as_word;
 pub use params::{CaseParams, PARAMETERS};
+pub use partial::{from_partial, param_names, partial_errors, type_error};
 use serde::{Deserialize, Serialize};
 pub use table::{Bound, Parameter, Range};
 

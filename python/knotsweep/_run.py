@@ -1,0 +1,187 @@
+"""``knotsweep.run``: one tightening case in this process, the solver of
+``knotsweep run`` (the same Rust code, compiled with the same profile), with
+the GIL released while it runs."""
+from __future__ import annotations
+
+import inspect
+import json
+import textwrap
+from typing import Any, Callable, NamedTuple
+
+import numpy as np
+
+from . import _native
+from ._params import PARAMETERS
+
+
+class Record(dict):
+    """A JSON object of a report: a dict whose keys are also attributes
+    (``r.inversion.l_k_bar`` and ``r.inversion["l_k_bar"]``)."""
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def __dir__(self):
+        return list(super().__dir__()) + list(self.keys())
+
+
+class Inversion(Record):
+    """The inversion point (eq. 11's quantities; docs/API.md, "Phase diagram"):
+    ``l_k_bar``, ``l_c_over_l``, ``F_bar_before``, ``F_bar_after``,
+    ``h_bar_before``, ``h_bar_after``, ``kinetic_energy_ratio``, ``sample``."""
+
+
+class Stats(Record):
+    """Counts and timings of a run: ``steps``, ``newton_iterations``,
+    ``contact_sweeps``, ``relax_steps``, ``rejected_steps``, ``smallest_dt``
+    (s), ``wall_time``, ``detection_time``, ``contact_time``, ``dynamics_time`` (s)."""
+
+
+class Stage(Record):
+    """A stretch of the run in one stage (``settle``, ``reference``,
+    ``approach``, ``snap``, ``after``): ``stage``, ``from_l_k_bar``,
+    ``to_l_k_bar``, ``steps``, ``newton_iterations``, ``contact_sweeps``."""
+
+
+class Frame(Record):
+    """A centreline snapshot: ``label``, ``l_k_bar``, ``points`` (a (K, 3)
+    numpy array, m) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``)."""
+
+
+class Progress(NamedTuple):
+    """What a running case reports after every sample."""
+
+    fraction: float
+    l_k_bar: float
+    h_bar: float
+    steps: int
+
+
+class Result:
+    """The report of one case, as ``knotsweep run --out`` writes it.
+
+    ``status`` (``completed``, ``diverged``, ``penetrated``,
+    ``topology_changed``, ``cancelled``) and ``reason``; ``params`` (every
+    parameter, defaults filled in); ``inversion`` (None when there is none);
+    ``series`` (numpy arrays by the columns of ``knotsweep run --csv``:
+    ``l_k_bar``, ``F_bar``, ``H_bar``, ...); ``frames``; ``stats``;
+    ``stages``; ``writhe`` and ``start_twist`` (turns); the knot determinants
+    ``determinant_initial`` and ``determinant_final``; ``report``, the whole
+    report as a dict (without the series)."""
+
+    def __init__(self, report: dict, series: dict[str, np.ndarray]):
+        self.report = report
+        self.status: str = report["status"]
+        self.reason: str = report["reason"]
+        self.params: dict = report["params"]
+        inversion = report.get("inversion")
+        self.inversion: Inversion | None = Inversion(inversion) if inversion is not None else None
+        self.series: dict[str, np.ndarray] = series
+        self.frames: list[Frame] = [
+            Frame({**f, "points": np.asarray(f["points"], dtype=float).reshape(-1, 3)})
+            for f in report.get("frames", [])
+        ]
+        self.stats = Stats(report.get("stats", {}))
+        self.stages: list[Stage] = [Stage(s) for s in report.get("stages", [])]
+        self.writhe: float = report.get("writhe", 0.0)
+        self.start_twist: float = report.get("start_twist", 0.0)
+        self.determinant_initial: int | None = report.get("determinant_initial")
+        self.determinant_final: int | None = report.get("determinant_final")
+
+    @property
+    def completed(self) -> bool:
+        """Whether the case ran to its stop condition."""
+        return self.status == "completed"
+
+    def to_pandas(self):
+        """The series as a pandas DataFrame (the columns of ``knotsweep run --csv``)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Result.to_pandas needs pandas: pip install pandas") from e
+        return pd.DataFrame(self.series)
+
+    def to_dict(self) -> dict:
+        """The report as ``knotsweep run --out`` writes it, series included (lists)."""
+        series = [
+            dict(zip(self.series, row)) for row in zip(*(a.tolist() for a in self.series.values()))
+        ]
+        return {**self.report, "series": series}
+
+    def __repr__(self) -> str:
+        p = self.params
+        inv = f"{self.inversion.l_k_bar:.2f}" if self.inversion else None
+        return (
+            f"<knotsweep.Result n={p['n']} h={p['h']} mu={p['mu']}: {self.status}, "
+            f"inversion l_k_bar {inv}, {len(self.series.get('l_k_bar', []))} samples>"
+        )
+
+
+def _progress_callback(progress: bool | Callable[[Progress], Any] | None):
+    """The native observer for ``run``'s ``progress``, and what to close after."""
+    if not progress:
+        return None, None
+    if callable(progress):
+        return (lambda *a: progress(Progress(*a))), None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None, None
+    bar = tqdm(total=1000, bar_format="{l_bar}{bar}| {elapsed}<{remaining} {postfix}")
+
+    def update(fraction, l_k_bar, h_bar, steps):
+        bar.n = int(fraction * 1000)
+        bar.set_postfix_str(f"l_k bar {l_k_bar:.1f}  H bar {h_bar:.2f}", refresh=False)
+        bar.refresh()
+
+    return update, bar
+
+
+def run(*, progress: bool | Callable[[Progress], Any] | None = None, **params: Any) -> Result:
+    bar = None
+    try:
+        callback, bar = _progress_callback(progress)
+        report, series = _native.run(params, callback)
+    finally:
+        if bar is not None:
+            bar.close()
+    return Result(json.loads(report), series)
+
+
+def validate(**params: Any) -> dict:
+    """Checks case parameters (the keywords of ``run``) as the API checks a
+    sweep's base, building the knot, and returns every parameter's value;
+    raises ParameterError (a ValueError) naming each bad field."""
+    return json.loads(_native.validate(params))
+
+
+def _run_doc() -> str:
+    lines = "\n".join(
+        textwrap.fill(p.docline, width=100, initial_indent="    ", subsequent_indent="        ")
+        for p in PARAMETERS
+    )
+    return (
+        "Runs one overhand-knot tightening case and returns its Result.\n\n"
+        "The keywords are the case parameters of the solver's one table (docs/API.md); any left\n"
+        "out takes the paper's default. An unknown name, a value of the wrong type or out of its\n"
+        "range raises ParameterError (a ValueError) naming the field, in the API's words.\n"
+        "The GIL is released while the solver runs, so threads run cases in parallel;\n"
+        "Ctrl-C stops the case and raises KeyboardInterrupt.\n\n"
+        "progress: True shows a progress bar (tqdm, if installed); a callable is called with a\n"
+        "    Progress(fraction, l_k_bar, h_bar, steps) after every sample, and returning False\n"
+        "    stops the case (status 'cancelled').\n\n"
+        "Case parameters (SI units):\n" + lines + "\n"
+    )
+
+
+run.__doc__ = _run_doc()
+run.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+    [inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None)]
+    + [
+        inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, default=p.default_value)
+        for p in PARAMETERS
+    ]
+)

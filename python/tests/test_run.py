@@ -1,0 +1,151 @@
+"""knotsweep.run against `knotsweep run`, the parameter errors, the GIL and Ctrl-C."""
+import json
+import os
+import signal
+import subprocess
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import knotsweep
+from conftest import QUICK
+
+# The same small case through the CLI and through Python: n = 2 on a coarse mesh,
+# a few seconds, with an inversion (at l_k bar 64.9).
+CASE = dict(n=2, nodes=201, h=2.4e-3, protocol="adaptive")
+
+
+def cli_flags(params):
+    return [a for k, v in params.items() for a in (f"--{k.replace('_', '-')}", str(v))]
+
+
+def test_same_inversion_and_series_as_the_cli(knotsweep_bin, tmp_path):
+    out, csv = tmp_path / "cli.json", tmp_path / "cli.csv"
+    done = subprocess.run([knotsweep_bin, "run", *cli_flags(CASE), "--out", str(out), "--csv", str(csv)],
+                          capture_output=True, text=True, timeout=900)
+    assert out.exists(), done.stdout + done.stderr
+    cli = json.loads(out.read_text())
+    r = knotsweep.run(**CASE)
+    assert r.status == cli["status"] and r.reason == cli["reason"]
+    assert r.params == cli["params"]
+    assert cli["inversion"] is not None, "the case should invert"
+    # The same binary result: every number equal, not close.
+    assert dict(r.inversion) == cli["inversion"]
+    assert list(r.series) == csv.read_text().splitlines()[0].split(",")
+    table = np.genfromtxt(csv, delimiter=",", names=True, ndmin=1)
+    for column, values in r.series.items():
+        assert np.array_equal(values, table[column]), column
+    assert r.stats.steps == cli["stats"]["steps"]
+    assert [s["stage"] for s in r.report["stages"]] == [s["stage"] for s in cli["stages"]]
+    assert len(r.frames) == len(cli["frames"])
+    for mine, theirs in zip(r.frames, cli["frames"]):
+        assert mine.label == theirs["label"]
+        assert np.array_equal(mine.points, np.array(theirs["points"]))
+    assert r.determinant_initial == cli["determinant_initial"] == 5
+
+
+def test_bad_parameter_raises_value_error_naming_the_field():
+    with pytest.raises(ValueError, match=r"^mu: must be in \[0, 2\], got -1$") as e:
+        knotsweep.run(n=3, mu=-1.0)
+    assert isinstance(e.value, knotsweep.ParameterError)
+    assert e.value.fields == [("mu", "must be in [0, 2], got -1")]
+    with pytest.raises(ValueError, match=r"^nu: unknown parameter; known: adaptive_dt, .*youngs_modulus$"):
+        knotsweep.run(nu=0.3)
+    with pytest.raises(ValueError, match=r"^n: invalid type: string \"three\", expected u32$"):
+        knotsweep.run(n="three")
+    with pytest.raises(ValueError, match=r"^h: must be in \[L/16000, L/50\)"):
+        knotsweep.run(h=0.5)
+    with pytest.raises(ValueError, match=r"^mu: must be a finite number, got NaN$"):
+        knotsweep.validate(mu=float("nan"))
+    # Every problem at once, as the API lists them.
+    with pytest.raises(ValueError) as e:
+        knotsweep.validate(mu=-1.0, poisson_ratio=0.7)
+    assert [f for f, _ in e.value.fields] == ["mu", "poisson_ratio"]
+
+
+def test_values_numpy_and_none():
+    params = knotsweep.validate(mu=np.float64(0.2), n=np.int64(2), gravity=np.zeros(3), dt=None)
+    assert params["mu"] == 0.2 and params["n"] == 2 and params["gravity"] == [0.0, 0.0, 0.0]
+    assert params["dt"] is None
+    assert set(params) == set(knotsweep.validate()) == {p.name for p in knotsweep.PARAMETERS}
+
+
+def test_parameters_and_docstrings_come_from_the_table():
+    h = next(p for p in knotsweep.PARAMETERS if p.name == "h")
+    assert (h.unit, h.default, h.paper, h.annotation) == ("m", "1.6e-3", "1.6 mm", "float")
+    doc = " ".join(knotsweep.run.__doc__.split())
+    assert "h (m): Rod radius h" in doc and "Paper: 1.6 mm." in doc
+    import inspect
+
+    signature = inspect.signature(knotsweep.run)
+    assert signature.parameters["mu"].default == 0.1
+    assert signature.parameters["gravity"].default == (0.0, 0.0, 0.0)
+
+
+def test_result_series_and_pandas():
+    r = knotsweep.run(**QUICK)
+    assert r.completed, r.reason
+    assert r.series["l_k_bar"].dtype == np.float64 and r.series["contacts"].dtype == np.int64
+    assert np.all(np.diff(r.series["l_k_bar"]) < 0)
+    assert r.frames and r.frames[0].points.shape == (102, 3)
+    assert r.stats.steps > 0 and r.stages
+    pd = pytest.importorskip("pandas")
+    df = r.to_pandas()
+    assert isinstance(df, pd.DataFrame) and len(df) == len(r.series["F_bar"])
+
+
+def test_threads_run_cases_in_parallel_with_the_gil_released():
+    counter = 0
+    stop = threading.Event()
+
+    def count():
+        nonlocal counter
+        while not stop.is_set():
+            counter += 1
+
+    ticker = threading.Thread(target=count)
+    ticker.start()
+    try:
+        started = time.perf_counter()
+        alone = knotsweep.run(**QUICK)
+        single = time.perf_counter() - started
+    finally:
+        stop.set()
+        ticker.join()
+    # A Python thread kept running while the solver ran.
+    assert counter > 10_000, counter
+    with ThreadPoolExecutor(2) as pool:
+        started = time.perf_counter()
+        results = list(pool.map(lambda mu: knotsweep.run(**QUICK, mu=mu), [0.1, 0.1]))
+        both = time.perf_counter() - started
+    print(f"one case {single:.2f} s, two in two threads {both:.2f} s on {os.cpu_count()} cores")
+    for r in results:
+        assert np.array_equal(r.series["F_bar"], alone.series["F_bar"])
+
+
+def test_progress_callback_and_cancel():
+    seen = []
+
+    def progress(p):
+        seen.append(p)
+        return len(seen) < 3
+
+    r = knotsweep.run(**QUICK, progress=progress)
+    assert r.status == "cancelled"
+    assert len(seen) == 3 and isinstance(seen[0], knotsweep.Progress) and 0 <= seen[0].fraction <= 1
+
+
+def test_ctrl_c_stops_a_run():
+    params = dict(QUICK, min_l_k_bar=60.0, pull_speed=0.003)
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            knotsweep.run(**params)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - started < 5.0

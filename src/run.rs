@@ -165,6 +165,10 @@ pub struct Args {
     /// Write SVG plots of F bar and H bar against l_k bar (paper Fig. 5 a, b) into this directory.
     #[arg(long)]
     plot: Option<PathBuf>,
+    /// Write the frames for ParaView into this directory: <out's stem>.pvd over one .vtp per frame and part
+    /// (centre line, contacts); docs/PARAVIEW.md.
+    #[arg(long, value_name = "DIR")]
+    vtk: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -191,6 +195,13 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.plot {
         write_plots(&report, dir)?;
     }
+    if let Some(dir) = &args.vtk {
+        let name = args
+            .out
+            .file_stem()
+            .map_or("case".into(), |s| s.to_string_lossy());
+        write_vtk(&report, &name, dir)?;
+    }
     if report.status != Status::Completed {
         anyhow::bail!("case ended with status {}: {}", report.status, report.reason);
     }
@@ -213,6 +224,16 @@ fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
         let svg = case_chart(&report.params, &report.series, inversion, quantity)?;
         let path = dir.join(file);
         std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The frames as ParaView files under `dir`: `{name}.pvd` and `{name}/*.vtp`.
+fn write_vtk(report: &CaseReport, name: &str, dir: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(dir.join(name)).with_context(|| format!("creating {}", dir.display()))?;
+    for file in report::vtk::case_files(name, report.params.h, &report.frames) {
+        let path = dir.join(&file.path);
+        std::fs::write(&path, file.text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

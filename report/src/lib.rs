@@ -6,10 +6,12 @@
 //! - [`snapshot`]: side views of the knot framed as the paper's Fig. 1;
 //! - [`simplified_doc`] and [`validation`]: `docs/SIMPLIFIED_MODEL.md` and
 //!   `docs/VALIDATION.md` with the figures they link;
-//! - [`parameters`]: the parameter table of `docs/API.md`.
+//! - [`parameters`]: the parameter table of `docs/API.md`;
+//! - [`vtk`]: a case's frames as ParaView files (VTK XML `.vtp` and `.pvd`).
 pub mod charts;
 pub mod parameters;
 pub mod simplified;
 pub mod simplified_doc;
 pub mod snapshot;
 pub mod validation;
+pub mod vtk;

@@ -13,6 +13,7 @@
 //! | `GET /api/sweeps/{id}/events` | server-sent progress events |
 //! | `GET /api/sweeps/{id}/phase-diagram` | inversion points of the sweep's cases |
 //! | `GET /api/cases/{id}`, `/series.csv`, `/frames` | a case, its series as CSV, its frames |
+//! | `GET /api/cases/{id}/frames.zip` | its frames for ParaView (`.pvd` over `.vtp` files, docs/PARAVIEW.md) |
 //!
 //! Limits: request bodies of at most [`Limits::max_body_bytes`] (413 beyond),
 //! at most [`Limits::max_cases`] cases per sweep (422 beyond). With a token
@@ -80,6 +81,7 @@ pub fn router(app: App) -> Router {
         .route("/api/cases/{id}", get(get_case))
         .route("/api/cases/{id}/series.csv", get(case_series_csv))
         .route("/api/cases/{id}/frames", get(case_frames))
+        .route("/api/cases/{id}/frames.zip", get(case_frames_zip))
         .route("/api/cases/{id}/figures/{figure}", get(case_figure))
         .route("/api/sweeps/{id}/figures/{figure}", get(sweep_figure))
         .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
@@ -112,7 +114,7 @@ pub fn openapi() -> OpenApiDoc {
     ),
     paths(
         submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
-        phase_diagram, get_case, case_series_csv, case_frames, list_presets, healthz, metrics
+        phase_diagram, get_case, case_series_csv, case_frames, case_frames_zip, list_presets, healthz, metrics
     ),
     components(schemas(
         SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
@@ -496,4 +498,22 @@ async fn sweep_figure(
 async fn case_frames(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
     let json = app.core.frames(id).await?;
     Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
+}
+
+/// The frames for ParaView: a zip of `case-{id}.pvd` and, per frame in time order, the centre line and the contacts
+/// as VTK XML PolyData (`case-{id}/centreline_NNN.vtp`, `case-{id}/contacts_NNN.vtp`; docs/PARAVIEW.md).
+#[utoipa::path(get, path = "/api/cases/{id}/frames.zip", tag = "cases", params(("id" = i64, Path)),
+    responses((status = 200, description = "zip of a .pvd and its .vtp files", content_type = "application/zip"),
+        (status = 404, body = ErrorBody)))]
+async fn case_frames_zip(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let zip = app.core.frames_zip(id).await?;
+    let disposition = format!("attachment; filename=\"case-{id}-frames.zip\"");
+    Ok((
+        [
+            (header::CONTENT_TYPE, "application/zip".to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        zip,
+    )
+        .into_response())
 }

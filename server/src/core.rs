@@ -14,6 +14,7 @@ use knotsweep_worker::store::{
 use report::charts::{self, CaseCurve, Quantity};
 use serde_json::Value;
 use solver::measurements::Sample;
+use solver::protocol::Frame;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -392,6 +393,16 @@ impl Core {
             .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))
     }
 
+    /// The frames as ParaView files (`report::vtk`: `case-{id}.pvd` over
+    /// `case-{id}/*.vtp`) in a zip archive; 404 before the result.
+    pub async fn frames_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
+        let c = self.case_record(id).await?;
+        let frames: Vec<Frame> = serde_json::from_str(&self.frames(id).await?)
+            .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
+        let files = report::vtk::case_files(&format!("case-{id}"), c.params.h, &frames);
+        zip_archive(&files).map_err(|e| CoreError::Figure(e.to_string()))
+    }
+
     pub async fn health(&self) -> Health {
         let database = self.store.queue_depth().await.is_ok();
         let stalled = self.pool.as_ref().map(|p| p.stalled_slots()).unwrap_or_default();
@@ -519,4 +530,16 @@ impl EventState {
             }
         }
     }
+}
+
+/// `files` deflated into a zip archive.
+fn zip_archive(files: &[report::vtk::VtkFile]) -> zip::result::ZipResult<Vec<u8>> {
+    use std::io::Write;
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default();
+    for file in files {
+        zip.start_file(file.path.as_str(), options)?;
+        zip.write_all(file.text.as_bytes())?;
+    }
+    Ok(zip.finish()?.into_inner())
 }

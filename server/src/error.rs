@@ -23,7 +23,7 @@ pub enum CoreError {
     Conflict(String),
     #[error("storage: {0}")]
     Store(StoreError),
-    /// A figure could not be drawn (500).
+    /// A figure or an archive could not be made (500).
     #[error("figure: {0}")]
     Figure(String),
 }

@@ -114,26 +114,7 @@ const END_REVIEW: f64 = 20.0;
 /// `RESTART_BEFORE`).
 const CHECKPOINTS: usize = 24;
 
-/// A centreline snapshot.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
-    pub label: String,
-    pub l_k_bar: f64,
-    pub points: Vec<[f64; 3]>,
-    /// The contacts carrying load at this frame (empty in frames stored before
-    /// they were recorded).
-    #[serde(default)]
-    pub contacts: Vec<FrameContact>,
-}
-
-/// A loaded contact of a frame: the closest points on the two segments (m)
-/// and the magnitude of the contact force (N).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FrameContact {
-    pub a: [f64; 3],
-    pub b: [f64; 3],
-    pub force: f64,
-}
+pub use crate::frame::{Frame, FrameContact};
 
 /// Counts and timings of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -617,7 +598,9 @@ impl<'a> Case<'a> {
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
         let at = self.l_k_bar();
-        self.report.frames.push(frame(&self.world, "relaxed", at));
+        self.report
+            .frames
+            .push(Frame::capture(&self.world, "relaxed", at, self.clock.elapsed));
         Ok(())
     }
 
@@ -722,7 +705,9 @@ impl<'a> Case<'a> {
         self.report.determinant_final = det;
         self.determinant(det, || "at the end".to_string())?;
         let at = self.l_k_bar();
-        self.report.frames.push(frame(&self.world, "final", at));
+        self.report
+            .frames
+            .push(Frame::capture(&self.world, "final", at, self.clock.elapsed));
         Ok(())
     }
 
@@ -945,7 +930,8 @@ impl<'a> Case<'a> {
         if pull.history.len() == FRAME_HISTORY {
             pull.history.pop_front();
         }
-        pull.history.push_back(frame(&self.world, "sample", l_k_bar));
+        pull.history
+            .push_back(Frame::capture(&self.world, "sample", l_k_bar, self.clock.elapsed));
         if self.report.inversion.is_none() {
             self.report.inversion = measurements::detect_inversion(&self.report.series, &pull.criteria);
             if let Some(inv) = self.report.inversion {
@@ -953,14 +939,19 @@ impl<'a> Case<'a> {
             }
         } else if let Some((next, end)) = pull.after_snap {
             if l_k_bar <= next && l_k_bar >= end {
-                self.report
-                    .frames
-                    .push(frame(&self.world, "after_inversion", l_k_bar));
+                self.report.frames.push(Frame::capture(
+                    &self.world,
+                    "after_inversion",
+                    l_k_bar,
+                    self.clock.elapsed,
+                ));
                 pull.after_snap = Some((l_k_bar - SNAP_FRAME_SPACING, end));
             }
         }
         if l_k_bar <= pull.next_frame {
-            self.report.frames.push(frame(&self.world, "pull", l_k_bar));
+            self.report
+                .frames
+                .push(Frame::capture(&self.world, "pull", l_k_bar, self.clock.elapsed));
             pull.next_frame = l_k_bar - FRAME_SPACING;
         }
     }
@@ -1025,34 +1016,6 @@ fn l_k_bar(world: &World, params: &CaseParams) -> f64 {
     (params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / params.h
 }
 
-/// A snapshot of the world's rod.
-fn frame(world: &World, label: &str, l_k_bar: f64) -> Frame {
-    let points = world.rods[0].positions();
-    let contacts = world
-        .contacts()
-        .iter()
-        .zip(world.contact_forces())
-        .filter(|(_, f)| f.norm() > 0.0)
-        .map(|(c, f)| {
-            let [a0, a1, b0, b1] = c.nodes;
-            let [w0, w1, w2, w3] = c.weights;
-            let a = points[a0] * w0 + points[a1] * w1;
-            let b = -(points[b0] * w2 + points[b1] * w3);
-            FrameContact {
-                a: [a.x, a.y, a.z],
-                b: [b.x, b.y, b.z],
-                force: f.norm(),
-            }
-        })
-        .collect();
-    Frame {
-        label: label.to_string(),
-        l_k_bar,
-        points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),
-        contacts,
-    }
-}
-
 fn finish(
     mut report: CaseReport,
     world: World,
@@ -1066,7 +1029,9 @@ fn finish(
     if status != Status::Completed {
         report.inversion = None;
         let at = l_k_bar(&world, &report.params);
-        report.frames.push(frame(&world, "failure", at));
+        report
+            .frames
+            .push(Frame::capture(&world, "failure", at, clock.elapsed));
     }
     report.stats.rejected_steps = clock.rejected;
     report.stats.smallest_dt = clock.smallest;

@@ -74,6 +74,8 @@ pub struct TimeStep {
     pub rejected: u64,
     /// The smallest step taken so far (s).
     pub smallest: f64,
+    /// Simulated time of the accepted steps so far (s).
+    pub elapsed: f64,
 }
 
 impl TimeStep {
@@ -85,6 +87,7 @@ impl TimeStep {
             calm: 0,
             rejected: 0,
             smallest: options.dt_max,
+            elapsed: 0.0,
         }
     }
 
@@ -118,6 +121,7 @@ impl TimeStep {
                 continue;
             }
             self.smallest = self.smallest.min(dt);
+            self.elapsed += dt;
             let rods = world.rods.len() as u32;
             if penetration > o.shrink_penetration {
                 self.halve();

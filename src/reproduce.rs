@@ -150,7 +150,8 @@ fn jobs() -> Result<Vec<Job>> {
     Ok(v)
 }
 
-/// The cases of the service's preset `name` (`knotsweep_server::spec`),
+/// The cases of the service's preset `name` (`knotsweep_server::spec`) under
+/// the reference pull, the paper's protocol (the presets pull adaptively),
 /// keyed `{name}_{axis}{value}`; the default case is keyed `n3`.
 fn preset_jobs(name: &str) -> Result<Vec<Job>> {
     let preset = knotsweep_server::spec::preset(name).with_context(|| format!("no preset {name}"))?;
@@ -159,6 +160,7 @@ fn preset_jobs(name: &str) -> Result<Vec<Job>> {
         for value in values {
             let mut fields = preset.base_params.as_object().cloned().unwrap_or_default();
             fields.insert(axis.clone(), value.clone());
+            fields.insert("protocol".into(), serde_json::to_value(Protocol::Reference)?);
             let params: CaseParams = serde_json::from_value(serde_json::Value::Object(fields))?;
             let key = if params == CaseParams::default() {
                 "n3".to_string()

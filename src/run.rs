@@ -5,6 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use report::charts::{Quantity, case_chart};
 use serde_json::Value;
 use solver::case::{CaseParams, PARAMETERS, Parameter, Range, ValidCase};
+use solver::certify::Uncertainty;
 use solver::protocol::{self, CaseReport, Status};
 use std::path::PathBuf;
 
@@ -169,6 +170,10 @@ pub struct Args {
     /// (centre line, contacts); docs/PARAVIEW.md.
     #[arg(long, value_name = "DIR")]
     vtk: Option<PathBuf>,
+    /// Also run the refined twin (time step halved) on another core and report the inversion's numerical
+    /// uncertainty, |refined - default| (the report's `uncertainty`; flagged above 2 %).
+    #[arg(long)]
+    certify: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -179,14 +184,29 @@ pub fn run(args: Args) -> Result<()> {
         ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} eta {eta} {msg}")
             .expect("valid template"),
     );
-    let report = protocol::run_valid(&case, &mut |p| {
-        bar.set_position((p.fraction * 1000.0) as u64);
-        bar.set_message(format!("l_k bar {:.1}  H bar {:.2}", p.l_k_bar, p.h_bar));
-        true
-    });
+    let twin = match args.certify {
+        true => Some(validated(&solver::certify::refined(&params))?),
+        false => None,
+    };
+    let (report, twin) = rayon::join(
+        || {
+            protocol::run_valid(&case, &mut |p| {
+                bar.set_position((p.fraction * 1000.0) as u64);
+                bar.set_message(format!("l_k bar {:.1}  H bar {:.2}", p.l_k_bar, p.h_bar));
+                true
+            })
+        },
+        || twin.map(|t| protocol::run_valid(&t, &mut |_| true)),
+    );
     bar.finish_and_clear();
     summarise(&report);
-    std::fs::write(&args.out, serde_json::to_string(&report)?)
+    let mut json = serde_json::to_value(&report)?;
+    if let Some(twin) = &twin {
+        let u = Uncertainty::new(report.inversion.as_ref(), Some(twin.inversion.as_ref()));
+        summarise_uncertainty(&u, twin);
+        json["uncertainty"] = serde_json::to_value(&u)?;
+    }
+    std::fs::write(&args.out, serde_json::to_string(&json)?)
         .with_context(|| format!("writing {}", args.out.display()))?;
     if let Some(path) = &args.csv {
         std::fs::write(path, solver::measurements::series_csv(&report.series))
@@ -236,6 +256,34 @@ fn write_vtk(report: &CaseReport, name: &str, dir: &std::path::Path) -> Result<(
         std::fs::write(&path, file.text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+fn summarise_uncertainty(u: &Uncertainty, twin: &CaseReport) {
+    let refined = u
+        .refined_l_k_bar
+        .map_or("none".to_string(), |l| format!("{l:.2}"));
+    match (u.absolute, u.relative) {
+        (Some(a), Some(r)) => println!(
+            "refined twin (dt {:.3e} s): inversion at l_k bar {refined}; uncertainty {a:.2} ({:.2} %){}",
+            twin.params.time_step(),
+            100.0 * r,
+            if u.converged == Some(true) {
+                ""
+            } else {
+                ": UNCONVERGED (above 2 %)"
+            }
+        ),
+        _ => println!(
+            "refined twin (dt {:.3e} s, status {}): inversion {refined}{}",
+            twin.params.time_step(),
+            twin.status,
+            if u.converged == Some(true) {
+                ""
+            } else {
+                ": UNCONVERGED (the twin disagrees)"
+            }
+        ),
+    }
 }
 
 fn summarise(report: &CaseReport) {

@@ -1067,6 +1067,80 @@ async fn cli_sweep_writes_the_phase_diagram_and_resumes_after_an_interruption() 
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_certified_sweep_runs_a_refined_twin_per_point_and_reports_its_uncertainty() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 2)).await;
+    let (url, c) = (server.url(), client());
+    let spec = json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3]}, "certify": true});
+    let r = c
+        .post(format!("{url}/api/sweeps"))
+        .json(&spec)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::CREATED);
+    let id = r.json::<Value>().await.unwrap()["id"].as_i64().unwrap();
+    let sweep = wait_sweep(&c, &url, id, Duration::from_secs(60), finished).await;
+    assert_eq!(sweep["total"], 4, "two points and their twins: {sweep:#}");
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
+    let cases = cases.as_array().unwrap();
+    let (points, twins): (Vec<&Value>, Vec<&Value>) = cases.iter().partition(|c| c["twin_of"].is_null());
+    assert_eq!((points.len(), twins.len()), (2, 2), "{cases:#?}");
+
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(diagram["certified"], true);
+    let diagram_points = diagram["points"].as_array().unwrap();
+    assert_eq!(diagram_points.len(), 2, "the twins are not points");
+    for p in diagram_points {
+        let twin_id = p["uncertainty"]["refined_case_id"].as_i64().unwrap();
+        let twin = twins
+            .iter()
+            .find(|t| t["case_id"] == twin_id)
+            .expect("the twin is a case of the sweep");
+        assert_eq!(twin["twin_of"], p["case_id"]);
+        let (_, point_case) = get(&c, &format!("{url}/api/cases/{}", p["case_id"])).await;
+        let (_, twin_case) = get(&c, &format!("{url}/api/cases/{twin_id}")).await;
+        let dt = |case: &Value| case["params"]["dt"].as_f64();
+        let point_dt = solver::case::CaseParams {
+            h: 5e-3,
+            nodes: 121,
+            ..Default::default()
+        }
+        .time_step();
+        assert_eq!(dt(&point_case), None, "the point keeps the default step");
+        assert_eq!(dt(&twin_case), Some(point_dt / 2.0), "the twin halves it");
+        assert_eq!(twin_case["params"]["mu"], point_case["params"]["mu"]);
+        // Neither short case inverts: they agree, with no distance to give.
+        assert!(
+            p["inversion"].is_null() && p["uncertainty"]["absolute"].is_null(),
+            "{p}"
+        );
+        assert_eq!(p["uncertainty"]["converged"], true, "{p}");
+    }
+
+    // An uncertified sweep of the same points reuses them and has no uncertainty.
+    let plain = json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3]}});
+    let r = c
+        .post(format!("{url}/api/sweeps"))
+        .json(&plain)
+        .send()
+        .await
+        .unwrap();
+    let body: Value = r.json().await.unwrap();
+    assert_eq!(body["cached"], 2, "{body:#}");
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{}/phase-diagram", body["id"])).await;
+    assert_eq!(diagram["certified"], false);
+    assert!(
+        diagram["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|p| p["uncertainty"].is_null())
+    );
+    server.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_pooled_sqlite_connection_has_wal_busy_timeout_and_foreign_keys() {
     let (_dir, db) = temp_db();
     let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();

@@ -159,17 +159,38 @@ pub fn line_chart(
 /// A phase diagram (paper Figs 7, 9, 11, 14, 15): the full model's critical
 /// l_k bar as points against the varied parameter, and the simplified model's
 /// as a line where given.
+/// A phase-diagram point: x, the inversion's l_k bar and, for a certified
+/// point, its numerical uncertainty (l_k bar) and whether it is within the
+/// convergence threshold.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhaseMark {
+    pub x: f64,
+    pub l_k_bar: f64,
+    pub uncertainty: Option<f64>,
+    pub converged: bool,
+}
+
+/// The phase diagram: inversions (error bars where certified, unconverged
+/// points as open red circles) and the simplified model's line.
 pub fn phase_chart(
     title: &str,
     x_label: &str,
-    points: &[(f64, f64)],
+    marks: &[PhaseMark],
     simplified: &[(f64, f64)],
 ) -> Result<String> {
+    let points: Vec<(f64, f64)> = marks.iter().map(|m| (m.x, m.l_k_bar)).collect();
+    let bars: Vec<(f64, f64)> = (marks.iter())
+        .filter_map(|m| {
+            m.uncertainty
+                .map(|u| [(m.x, m.l_k_bar - u), (m.x, m.l_k_bar + u)])
+        })
+        .flatten()
+        .collect();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-        let all = points.iter().chain(simplified);
+        let all = points.iter().chain(simplified).chain(&bars);
         let (mut x0, mut x1, mut y0, mut y1) =
             (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
         for &(x, y) in all {
@@ -199,6 +220,36 @@ pub fn phase_chart(
             .map_err(|e| anyhow!("{e}"))?
             .label("full model (inversion)")
             .legend(move |(x, y)| Circle::new((x + 9, y), 5, blue.filled()));
+        if !bars.is_empty() {
+            chart
+                .draw_series(marks.iter().filter_map(|m| {
+                    let u = m.uncertainty?;
+                    Some(ErrorBar::new_vertical(
+                        m.x,
+                        m.l_k_bar - u,
+                        m.l_k_bar,
+                        m.l_k_bar + u,
+                        BLACK.stroke_width(1),
+                        8,
+                    ))
+                }))
+                .map_err(|e| anyhow!("{e}"))?
+                .label("numerical uncertainty (refined twin: time step halved)")
+                .legend(|(x, y)| PathElement::new(vec![(x + 9, y - 6), (x + 9, y + 6)], BLACK));
+        }
+        if marks.iter().any(|m| !m.converged) {
+            let red = RED.stroke_width(2);
+            chart
+                .draw_series(
+                    marks
+                        .iter()
+                        .filter(|m| !m.converged)
+                        .map(|m| Circle::new((m.x, m.l_k_bar), 9, red)),
+                )
+                .map_err(|e| anyhow!("{e}"))?
+                .label("unconverged (uncertainty above 2 %)")
+                .legend(move |(x, y)| Circle::new((x + 9, y), 7, red));
+        }
         if !simplified.is_empty() {
             let red = Palette99::pick(1).to_rgba();
             chart

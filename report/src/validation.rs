@@ -236,7 +236,7 @@ pub fn markdown(
     };
     rows.push((
         "n = 3, h = 1.6 ... 3.2 mm: critical l_k bar nearly the same (spread <= 15 %)".into(),
-        "knotsweep sweep --preset fig7".into(),
+        "knotsweep sweep --preset fig7 --set protocol=reference".into(),
         spread_text,
         spread_ok,
     ));
@@ -253,7 +253,7 @@ pub fn markdown(
         && mus[6] >= mus[0].map(|x| 1.1 * x);
     rows.push((
         "n = 3, h = 3.4 mm, mu = 0.1 ... 0.7: critical l_k bar grows with mu (never falls by more than 2 % from one mu to the next, mu = 0.7 at least 10 % above mu = 0.1) with F bar falling through every snap (paper Fig. 11)".into(),
-        "knotsweep sweep --preset fig11".into(),
+        "knotsweep sweep --preset fig11 --set protocol=reference".into(),
         mus.iter()
             .map(|m| m.map_or("-".to_string(), |x| format!("{x:.1}")))
             .collect::<Vec<_>>()

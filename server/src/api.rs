@@ -118,7 +118,7 @@ pub fn openapi() -> OpenApiDoc {
     ),
     components(schemas(
         SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
-        SubmitResponse, PhaseDiagram, PhasePoint, InversionPoint, CaseProgress, CaseDetail, ResultView,
+        SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
         LogLineView, Health, SweepEvent, RunningCase
     )),
     modifiers(&Extras),

@@ -5,7 +5,7 @@
 use crate::error::CoreError;
 use crate::spec::{self, Expanded, FieldError, Limits, SweepSpec};
 use crate::strict_json;
-use crate::views::*;
+use crate::views::{self, *};
 use futures_util::Stream;
 use knotsweep_worker::pool::PoolHandle;
 use knotsweep_worker::store::{
@@ -233,10 +233,11 @@ impl Core {
         let base = spec::base_params(&spec)
             .map(|p| serde_json::to_value(p).expect("params serialise"))
             .unwrap_or(Value::Null);
+        let (points, _) = views::points(&record, &cases);
         let simplified = futures_util::future::join_all(
-            cases
+            points
                 .iter()
-                .map(|c| self.simplified_snap(c.case.params.n, c.case.params.h)),
+                .map(|p| self.simplified_snap(p.case.case.params.n, p.case.case.params.h)),
         )
         .await;
         Ok(PhaseDiagram::new(&record, &cases, base, simplified))
@@ -253,10 +254,17 @@ impl Core {
         };
         let scale = if axis == "h" { 1e3 } else { 1.0 };
         let x = |p: &PhasePoint| p.params.get(axis).and_then(Value::as_f64).map(|v| v * scale);
-        let points: Vec<(f64, f64)> = pd
+        let marks: Vec<charts::PhaseMark> = pd
             .points
             .iter()
-            .filter_map(|p| Some((x(p)?, p.inversion.as_ref()?.l_k_bar)))
+            .filter_map(|p| {
+                Some(charts::PhaseMark {
+                    x: x(p)?,
+                    l_k_bar: p.inversion.as_ref()?.l_k_bar,
+                    uncertainty: p.uncertainty.as_ref().and_then(|u| u.absolute),
+                    converged: p.uncertainty.as_ref().is_none_or(|u| u.converged != Some(false)),
+                })
+            })
             .collect();
         let simplified: Vec<(f64, f64)> = if axis == "n" || axis == "h" {
             pd.points
@@ -274,7 +282,7 @@ impl Core {
         charts::phase_chart(
             &format!("sweep {id}: critical l_k bar against {x_label}"),
             &x_label,
-            &points,
+            &marks,
             &simplified,
         )
         .map_err(|e| CoreError::Figure(e.to_string()))
@@ -357,9 +365,11 @@ impl Core {
         let record = self.record(id).await?;
         let mut loaded = Vec::new();
         // The sweep's case rows already hold their result summaries: only the series are read.
-        for s in self.store.sweep_cases(id).await? {
+        let cases = self.store.sweep_cases(id).await?;
+        for point in views::points(&record, &cases).0 {
+            let s = point.case;
             if s.case.result.is_some() {
-                let label = SweepCaseView::from((&s, &record.varied[..]))
+                let label = SweepCaseView::from((s, &record.varied[..]))
                     .params
                     .iter()
                     .map(|(k, v)| format!("{k} = {v}"))
@@ -472,16 +482,25 @@ fn new_sweep(spec: &SweepSpec, raw: &Value, expanded: Expanded, idempotency_key:
         preset: expanded.preset,
         spec: serde_json::to_value(spec).expect("spec serialises"),
         varied: expanded.varied,
-        cases: expanded
-            .cases
-            .into_iter()
-            .map(|c| NewCase::new(c.params))
-            .collect(),
+        cases: with_twins(expanded.cases, expanded.twins),
         idempotency: idempotency_key.map(|key| Idempotency {
             key: key.to_string(),
             request_hash,
         }),
     }
+}
+
+/// The sweep's cases: its points in grid order, then the refined twins not
+/// already among them ([`spec::points`] tells the two apart).
+fn with_twins(points: Vec<spec::GridCase>, twins: Vec<solver::case::CaseParams>) -> Vec<NewCase> {
+    let mut cases: Vec<NewCase> = points.into_iter().map(|c| NewCase::new(c.params)).collect();
+    for twin in twins {
+        let twin = NewCase::new(twin);
+        if !cases.iter().any(|c| c.key == twin.key) {
+            cases.push(twin);
+        }
+    }
+    cases
 }
 
 /// Where a sweep's event stream is.

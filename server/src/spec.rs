@@ -59,6 +59,11 @@ pub struct SweepSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(value_type = Option<BTreeMap<String, Vec<Object>>>, example = json!({"h": [0.0016, 0.002], "mu": [0.1, 0.2]}))]
     pub grid: Option<BTreeMap<String, Vec<Value>>>,
+    /// Certify every point: also run each case's refined twin (time step
+    /// halved, `solver::certify`), so that the phase diagram gives each
+    /// inversion its numerical uncertainty. About 3 times the cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub certify: Option<bool>,
 }
 
 /// A field and why its value was refused.
@@ -100,7 +105,12 @@ fn numbers(values: &[f64]) -> Vec<Value> {
     values.iter().map(|v| Value::from(*v)).collect()
 }
 
-/// The presets: the paper's Figs 7, 9 and 11.
+/// The presets: the paper's Figs 7, 9 and 11. They measure inversion points,
+/// so they pull with the adaptive protocol: within 0.5 % of the reference
+/// pull at every one of their cases at about a tenth of its cost
+/// (BENCHMARKS.md, "Physics revision 6"); a case's F bar series away from
+/// the snap is then the fast approach's (5-20 % high).
+
 pub fn presets() -> Vec<Preset> {
     let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
         let base = base.as_object().cloned().unwrap_or_default();
@@ -120,21 +130,21 @@ pub fn presets() -> Vec<Preset> {
         make(
             "fig7",
             "Paper Fig. 7: inversion point vs rod radius h (n = 3, mu = 0.1, h = 1.6 ... 3.2 mm)",
-            serde_json::json!({"n": 3, "mu": 0.1}),
+            serde_json::json!({"n": 3, "mu": 0.1, "protocol": "adaptive"}),
             "h",
             numbers(&[1.6e-3, 2.0e-3, 2.4e-3, 2.8e-3, 3.2e-3]),
         ),
         make(
             "fig9",
             "Paper Fig. 9: inversion point vs number of passes n (h = 1.6 mm, mu = 0.1, n = 1 ... 5)",
-            serde_json::json!({"h": 1.6e-3, "mu": 0.1}),
+            serde_json::json!({"h": 1.6e-3, "mu": 0.1, "protocol": "adaptive"}),
             "n",
             (1..=5).map(Value::from).collect(),
         ),
         make(
             "fig11",
             "Paper Fig. 11: inversion point vs friction mu (n = 3, h = 3.4 mm, mu = 0.1 ... 0.7)",
-            serde_json::json!({"n": 3, "h": 3.4e-3}),
+            serde_json::json!({"n": 3, "h": 3.4e-3, "protocol": "adaptive"}),
             "mu",
             numbers(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
         ),
@@ -163,6 +173,17 @@ pub struct Expanded {
     /// Axis names in order.
     pub varied: Vec<String>,
     pub cases: Vec<GridCase>,
+    /// With `certify`: each case's refined twin, in the cases' order.
+    pub twins: Vec<CaseParams>,
+}
+
+/// The number of grid points of a spec (its preset's grid or its own; 1
+/// without a grid): a sweep's first cases are its points, any further ones
+/// their refined twins.
+pub fn points(spec: &SweepSpec) -> usize {
+    let preset = spec.preset.as_deref().and_then(preset);
+    let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
+    grid.map_or(1, |g| g.values().map(Vec::len).product())
 }
 
 /// The full parameters of a spec's base (preset base, then the given base),
@@ -210,11 +231,14 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     let count = axes
         .iter()
         .fold(1usize, |n, (_, values)| n.saturating_mul(values.len()));
-    if count > limits.max_cases {
+    let certify = spec.certify == Some(true);
+    let total = if certify { count.saturating_mul(2) } else { count };
+    if total > limits.max_cases {
+        let twins = if certify { " with their refined twins" } else { "" };
         errors.push(FieldError::new(
             "grid",
             format!(
-                "{count} cases exceed the limit of {} cases per sweep",
+                "{total} cases{twins} exceed the limit of {} cases per sweep",
                 limits.max_cases
             ),
         ));
@@ -223,6 +247,11 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
         return Err(errors);
     }
     let cases = cartesian(&base, &axes, count, &mut errors);
+    let twins = if certify {
+        refined_twins(&cases, &mut errors)
+    } else {
+        Vec::new()
+    };
     if !errors.is_empty() {
         return Err(errors);
     }
@@ -232,7 +261,24 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
         base,
         varied: axes.into_iter().map(|(a, _)| a).collect(),
         cases,
+        twins,
     })
+}
+
+/// The refined twin of each case ([`solver::certify::refined`]); a twin out
+/// of range (a time step already at its smallest) refuses `certify`.
+fn refined_twins(cases: &[GridCase], errors: &mut Vec<FieldError>) -> Vec<CaseParams> {
+    let twins: Vec<CaseParams> = cases
+        .iter()
+        .map(|c| solver::certify::refined(&c.params))
+        .collect();
+    if let Some(problem) = twins.iter().find_map(|t| t.range_errors().into_iter().next()) {
+        errors.push(FieldError::new(
+            "certify",
+            format!("a refined twin (time step halved) is out of range: {problem}"),
+        ));
+    }
+    twins
 }
 
 /// Checks the name and the preset (known, and not given with a grid);
@@ -365,6 +411,51 @@ mod tests {
 
     fn fields(r: Result<Expanded, Vec<FieldError>>) -> Vec<String> {
         r.unwrap_err().into_iter().map(|e| e.field).collect()
+    }
+
+    #[test]
+    fn certify_adds_a_refined_twin_per_case_and_counts_it_against_the_limit() {
+        let l = Limits::default();
+        let plain = expand(&spec(serde_json::json!({"preset": "fig9"})), &l).unwrap();
+        assert!(plain.twins.is_empty());
+        let certified = expand(&spec(serde_json::json!({"preset": "fig9", "certify": true})), &l).unwrap();
+        assert_eq!(
+            certified.cases, plain.cases,
+            "the points are the uncertified sweep's"
+        );
+        assert_eq!(certified.twins.len(), 5);
+        for (twin, point) in certified.twins.iter().zip(&certified.cases) {
+            assert_eq!(twin.time_step(), point.params.time_step() / 2.0);
+            assert_eq!(twin.n, point.params.n);
+        }
+        assert_eq!(
+            points(&spec(serde_json::json!({"preset": "fig9", "certify": true}))),
+            5
+        );
+        assert_eq!(
+            points(&spec(
+                serde_json::json!({"grid": {"n": [2, 3], "mu": [0.1, 0.2, 0.3]}})
+            )),
+            6
+        );
+        assert_eq!(points(&spec(serde_json::json!({"base": {"n": 2}}))), 1);
+        let small = Limits {
+            max_cases: 6,
+            ..Limits::default()
+        };
+        let grid = serde_json::json!({"grid": {"mu": [0.1, 0.2, 0.3, 0.4]}});
+        assert!(expand(&spec(grid.clone()), &small).is_ok());
+        let mut certified = grid;
+        certified["certify"] = true.into();
+        assert_eq!(
+            fields(expand(&spec(certified), &small)),
+            ["grid"],
+            "8 cases with the twins"
+        );
+        let finest = serde_json::json!({"base": {"dt": 1.5e-6}, "certify": true});
+        let errors = expand(&spec(finest), &l).unwrap_err();
+        assert_eq!(errors[0].field, "certify", "{errors:?}");
+        assert!(errors[0].reason.contains("dt"), "{errors:?}");
     }
 
     #[test]

@@ -118,6 +118,9 @@ pub struct SweepCaseView {
     pub reason: Option<String>,
     /// Solver wall time (s) of the result.
     pub wall_time: Option<f64>,
+    /// In a certified sweep, a refined twin's point (its case id); null for
+    /// the points themselves.
+    pub twin_of: Option<i64>,
 }
 
 /// A sweep with its cases.
@@ -170,6 +173,9 @@ pub struct PhasePoint {
     /// (paper Sec. 5, Figs 14 and 15: epsilon = 0.7, phi = pi/3, no contact or
     /// friction); null where the model has no snap (n = 1).
     pub simplified_l_k_bar: Option<f64>,
+    /// In a certified sweep, the inversion's numerical uncertainty from the
+    /// refined twin; null otherwise.
+    pub uncertainty: Option<UncertaintyView>,
 }
 
 /// The phase diagram of a sweep: for each case its varied parameters, status
@@ -193,6 +199,8 @@ pub struct PhaseDiagram {
     /// The physics revision the points were computed under (part of every
     /// case's cache key; `solver::case::PHYSICS_REVISION`).
     pub physics_revision: u32,
+    /// Every point carries its `uncertainty` (the sweep asked to `certify`).
+    pub certified: bool,
     pub points: Vec<PhasePoint>,
 }
 
@@ -455,6 +463,68 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
                 .map(InversionPoint::from),
             reason: reason_of(c),
             wall_time: c.result.as_ref().map(|r| r.wall_time),
+            twin_of: None,
+        }
+    }
+}
+
+/// A sweep's point (one of its first [`crate::spec::points`] cases) and, in a
+/// certified sweep, its refined twin ([`solver::certify::refined`], found by
+/// its cache key among the sweep's cases).
+pub struct Point<'a> {
+    pub case: &'a SweepCase,
+    pub twin: Option<&'a SweepCase>,
+}
+
+/// The points of a sweep of `cases` (in position order) and whether it is certified.
+pub fn points<'a>(record: &SweepRecord, cases: &'a [SweepCase]) -> (Vec<Point<'a>>, bool) {
+    let spec: crate::spec::SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
+    let count = crate::spec::points(&spec);
+    let certified = spec.certify == Some(true);
+    let points = cases
+        .iter()
+        .filter(|c| (c.position as usize) < count)
+        .map(|case| Point {
+            case,
+            twin: certified
+                .then(|| knotsweep_worker::key::case_key(&solver::certify::refined(&case.case.params)))
+                .and_then(|key| cases.iter().find(|c| c.case.key == key)),
+        })
+        .collect();
+    (points, certified)
+}
+
+/// The numerical uncertainty of a certified point: its refined twin's
+/// inversion against its own (`solver::certify::Uncertainty`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct UncertaintyView {
+    /// The refined twin (time step halved).
+    pub refined_case_id: i64,
+    /// The twin's inversion l_k bar (null without one or before its result).
+    pub refined_l_k_bar: Option<f64>,
+    /// |refined - default| in l_k bar (null unless both inverted).
+    pub absolute: Option<f64>,
+    /// `absolute` over the point's l_k bar.
+    pub relative: Option<f64>,
+    /// `relative` <= 2 % (`solver::certify::CONVERGED_WITHIN`); false when
+    /// only one of the two inverted; null before the twin's result.
+    pub converged: Option<bool>,
+}
+
+impl UncertaintyView {
+    fn new(point: &CaseRecord, twin: &CaseRecord) -> Self {
+        let inversion = |c: &CaseRecord| c.result.as_ref().and_then(|r| r.inversion);
+        let refined = twin.result.as_ref().map(|_| inversion(twin));
+        let u = solver::certify::Uncertainty::new(
+            inversion(point).as_ref(),
+            refined.as_ref().map(Option::as_ref),
+        );
+        Self {
+            refined_case_id: twin.id,
+            refined_l_k_bar: u.refined_l_k_bar,
+            absolute: u.absolute,
+            relative: u.relative,
+            converged: u.converged,
         }
     }
 }
@@ -484,10 +554,23 @@ impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
             progress: ((finished + running_done) / total).clamp(0.0, 1.0),
             eta_seconds,
             cached: cases.iter().filter(|c| c.cached).count() as i64,
-            cases: cases
-                .iter()
-                .map(|c| SweepCaseView::from((c, &record.varied[..])))
-                .collect(),
+            cases: {
+                let (points, _) = points(record, cases);
+                let twin_of = |c: &SweepCase| {
+                    (points.iter())
+                        .find(|p| {
+                            p.twin.is_some_and(|t| t.case.id == c.case.id) && p.case.case.id != c.case.id
+                        })
+                        .map(|p| p.case.case.id)
+                };
+                cases
+                    .iter()
+                    .map(|c| SweepCaseView {
+                        twin_of: twin_of(c),
+                        ..SweepCaseView::from((c, &record.varied[..]))
+                    })
+                    .collect()
+            },
             summary,
         }
     }
@@ -590,9 +673,10 @@ impl CaseDetail {
 
 impl PhaseDiagram {
     /// The phase diagram of a sweep: `base` its full base parameters,
-    /// `simplified` the simplified model's snap for each case (grid order).
+    /// `simplified` the simplified model's snap for each point (grid order).
     pub fn new(record: &SweepRecord, cases: &[SweepCase], base: Value, simplified: Vec<Option<f64>>) -> Self {
         let d = SweepDetail::from((record, cases));
+        let (points, certified) = points(record, cases);
         Self {
             sweep_id: record.id,
             name: record.name.clone(),
@@ -603,17 +687,19 @@ impl PhaseDiagram {
             base,
             solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
             physics_revision: solver::case::PHYSICS_REVISION,
-            points: d
-                .cases
-                .into_iter()
+            certified,
+            points: (d.cases.into_iter().zip(&points))
                 .zip(simplified)
-                .map(|(c, simplified_l_k_bar)| PhasePoint {
+                .map(|((c, point), simplified_l_k_bar)| PhasePoint {
                     case_id: c.case_id,
                     params: c.params,
                     status: c.status,
                     inversion: c.inversion,
                     reason: c.reason,
                     simplified_l_k_bar,
+                    uncertainty: point
+                        .twin
+                        .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
                 })
                 .collect(),
         }

@@ -5,10 +5,12 @@
 //! (eq. 6), `external` (eq. 7c), `stepper` (eq. 7, over `linalg`'s banded
 //! LDL^T), `contact` (Sec. 3.2), `pipeline` (one step), `knot` and
 //! `protocol` with `measurements` (Sec. 4), `simplified` (Sec. 5); `case`
-//! defines a case's parameters and validates them; `frame` holds the
+//! defines a case's parameters and validates them, `certify` a case's
+//! refined twin and the uncertainty it gives; `frame` holds the
 //! snapshots a report keeps for viewers. Pure computation: no I/O,
 //! deterministic for given inputs.
 pub mod case;
+pub mod certify;
 pub mod contact;
 pub mod counters;
 pub mod energies;

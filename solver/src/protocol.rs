@@ -50,12 +50,13 @@ impl Status {
 }
 
 /// [`Protocol::Adaptive`]: the largest friction coefficient it runs fast
-/// at; above it the whole pull is the reference's. Where friction is high the
-/// knot's state depends on how it was pulled (at mu = 0.5 the reference
-/// itself moves by 2.5 % between 1.5 and 3 mm/s), and the fast approaches
-/// tried landed 1.8-17 % from the reference at mu = 0.3-0.7, or lost the
-/// snap (BENCHMARKS.md, issue 17's notes).
-pub const ADAPTIVE_MAX_MU: f64 = 0.2;
+/// at; above it the whole pull is the reference's. Under physics revision 5
+/// (friction at the centre lines, the paper's start twist) every Fig. 11 case
+/// (h = 3.4 mm, mu = 0.1 ... 0.7) snaps cleanly and the adaptive pull lands
+/// within 0.3 % of the reference's at each (BENCHMARKS.md, "Physics revision
+/// 6"); larger frictions were not measured. (Under revision 4's rolling
+/// strands the fast approaches landed 1.8-17 % off at mu = 0.3-0.7.)
+pub const ADAPTIVE_MAX_MU: f64 = 0.7;
 /// Whether `params` pull fast far from the snap: [`Protocol::Adaptive`] up
 /// to [`ADAPTIVE_MAX_MU`].
 pub fn pulls_fast(params: &CaseParams) -> bool {
@@ -110,6 +111,12 @@ const FALSE_ALARM: f64 = 10.0;
 /// the snap speed when the fast approach reaches it without a snap (its lag
 /// and swinging may hide one there).
 const END_REVIEW: f64 = 20.0;
+/// [`Protocol::Adaptive`]: a fall of H bar to this fraction of its largest
+/// value within `SMEARED_WINDOW` (l_k bar) is a snap the fast approach
+/// smeared out ([`smeared_snap`]). Steady tightening lowers H bar by about
+/// 10 % over that distance (n = 3: 0.59 at l_k bar 431 to 0.24 at 141).
+const SMEARED_FALL: f64 = 0.5;
+const SMEARED_WINDOW: f64 = 20.0;
 /// [`Protocol::Adaptive`]: checkpoints kept (they span several retries of
 /// `RESTART_BEFORE`).
 const CHECKPOINTS: usize = 24;
@@ -492,6 +499,23 @@ impl Stage {
     }
 }
 
+/// A snap the damped fast approach smeared out: H bar has fallen below
+/// `SMEARED_FALL` of its largest value within the last `SMEARED_WINDOW` of
+/// l_k bar. Returns where that largest value was (the fold lies after it) and
+/// where H bar is now. The damping slows the snap down while the clamps go on
+/// moving, so that it spans several samples without the sudden drop that
+/// [`measurements::detect_inversion`] looks for (n = 5: H bar 0.18 -> 0.03
+/// over 25 l_k bar, where the reference pull snaps at once).
+fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
+    let last = series.last().filter(|s| s.h_bar > 0.0)?;
+    let peak = series
+        .iter()
+        .rev()
+        .take_while(|s| s.l_k_bar <= last.l_k_bar + SMEARED_WINDOW)
+        .max_by(|a, b| a.h_bar.total_cmp(&b.h_bar))?;
+    (last.h_bar < SMEARED_FALL * peak.h_bar).then_some((peak.l_k_bar, last.l_k_bar))
+}
+
 /// From the snap speed (0) to the fast one (1).
 fn ramp(fraction: f64) -> f64 {
     SNAP_FACTOR + (FAST_FACTOR - SNAP_FACTOR) * fraction.clamp(0.0, 1.0)
@@ -738,6 +762,15 @@ impl<'a> Case<'a> {
     /// sees a snap (returns `true`), checkpoints while fast, fast again past
     /// the snap or after a false alarm; otherwise the clamps' speed.
     fn schedule(&mut self, pull: &mut Pull, saved: &mut Checkpoints, l_k_bar: f64) -> Result<bool, Ending> {
+        if pull.stage == Stage::Approach && self.report.inversion.is_none() {
+            if let Some((began, fell)) = smeared_snap(&self.report.series) {
+                if let Some(c) = saved.before(began + RESTART_BEFORE) {
+                    self.restore(c, pull)?;
+                    pull.fast_snap = Some(fell);
+                    return Ok(true);
+                }
+            }
+        }
         match (pull.stage, self.report.inversion) {
             (Stage::Approach, Some(inv)) => {
                 if let Some(c) = saved.before(inv.l_k_bar + RESTART_BEFORE) {

@@ -31,7 +31,10 @@ pub use table::{Bound, Parameter, Range};
 /// (`start_twist`, linking number 2n), the reference pull is the default
 /// protocol, and F bar is the clamp force averaged over each sample's
 /// interval (docs/FIDELITY.md).
-pub const PHYSICS_REVISION: u32 = 5;
+/// Revision 6: the adaptive pull runs fast up to mu = 0.7 (was 0.2) and
+/// goes back to pull slowly through a snap its damped approach smeared out
+/// (`protocol::smeared_snap`); the reference pull is unchanged.
+pub const PHYSICS_REVISION: u32 = 6;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -164,7 +167,7 @@ impl CaseParams {
     }
 
     /// Every range of [`PARAMETERS`] that does not hold, in the table's order.
-    fn range_errors(&self) -> Vec<ParamError> {
+    pub fn range_errors(&self) -> Vec<ParamError> {
         PARAMETERS.iter().filter_map(|p| p.check(self)).collect()
     }
 

@@ -43,8 +43,9 @@ inverted = df.dropna(subset=["l_k_bar"])
 snap = inverted["F_bar_after"] < inverted["F_bar_before"]
 ax.plot(inverted["mu"], inverted["l_k_bar"], "-", color="C0", zorder=1)
 ax.scatter(inverted["mu"][snap], inverted["l_k_bar"][snap], color="C0", label="simulation (snap)", zorder=2)
-ax.scatter(inverted["mu"][~snap], inverted["l_k_bar"][~snap], facecolors="white", edgecolors="C0",
-           label="simulation (F bar does not fall)", zorder=2)
+if (~snap).any():
+    ax.scatter(inverted["mu"][~snap], inverted["l_k_bar"][~snap], facecolors="white", edgecolors="C0",
+               label="simulation (F bar does not fall)", zorder=2)
 simplified = df["simplified_l_k_bar"].dropna()
 if len(simplified):
     ax.axhline(simplified.iloc[0], color="k", linestyle="--", label="simplified model (no friction)")

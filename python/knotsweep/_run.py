@@ -48,7 +48,8 @@ class Stage(Record):
 
 class Frame(Record):
     """A centreline snapshot: ``label``, ``l_k_bar``, ``points`` (a (K, 3)
-    numpy array, m) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``)."""
+    numpy array, m), the other per-node quantities the solver records (numpy
+    arrays) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``, ...)."""
 
 
 class Progress(NamedTuple):
@@ -80,10 +81,7 @@ class Result:
         inversion = report.get("inversion")
         self.inversion: Inversion | None = Inversion(inversion) if inversion is not None else None
         self.series: dict[str, np.ndarray] = series
-        self.frames: list[Frame] = [
-            Frame({**f, "points": np.asarray(f["points"], dtype=float).reshape(-1, 3)})
-            for f in report.get("frames", [])
-        ]
+        self.frames: list[Frame] = [_frame(f) for f in report.get("frames", [])]
         self.stats = Stats(report.get("stats", {}))
         self.stages: list[Stage] = [Stage(s) for s in report.get("stages", [])]
         self.writhe: float = report.get("writhe", 0.0)
@@ -118,6 +116,17 @@ class Result:
             f"<knotsweep.Result n={p['n']} h={p['h']} mu={p['mu']}: {self.status}, "
             f"inversion l_k_bar {inv}, {len(self.series.get('l_k_bar', []))} samples>"
         )
+
+
+def _frame(frame: dict) -> Frame:
+    """A report's frame with its per-node lists (points, and whatever else
+    the solver records per node) as numpy arrays."""
+    out = Frame(frame)
+    for key, value in frame.items():
+        if key != "contacts" and isinstance(value, list):
+            out[key] = np.asarray(value, dtype=float)
+    out["points"] = np.asarray(frame["points"], dtype=float).reshape(-1, 3)
+    return out
 
 
 def _progress_callback(progress: bool | Callable[[Progress], Any] | None):

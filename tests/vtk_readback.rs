@@ -1,0 +1,121 @@
+//! The ParaView files read back by VTK's own XML readers (the `vtk` package
+//! from PyPI, the readers ParaView uses): those of `knotsweep run --vtk` and
+//! those of `GET /api/cases/{id}/frames.zip`. Each centre line has one point
+//! per node and its fields, each contact file its forces, and the `.pvd`'s
+//! times increase. The `.pvd` checks need only `python3`; the readers are
+//! skipped, with the reason, when `import vtk` fails.
+mod common;
+
+use common::*;
+use reqwest::StatusCode;
+use std::path::Path;
+use std::process::Command;
+
+/// Checks the `.pvd` at `argv[1]` and its files, centre lines of `argv[2]`
+/// nodes; `argv[3]`, when given, is a zip to unpack beside the `.pvd` first.
+/// Exit 3: no `vtk` module (the XML checks passed).
+const CHECK: &str = r#"
+import os, sys, zipfile, xml.etree.ElementTree as ET
+pvd, nodes = sys.argv[1], int(sys.argv[2])
+if len(sys.argv) > 3:
+    zipfile.ZipFile(sys.argv[3]).extractall(os.path.dirname(pvd))
+sets = ET.parse(pvd).getroot().findall("./Collection/DataSet")
+parts = {}
+for s in sets:
+    parts.setdefault(s.get("part"), []).append((float(s.get("timestep")), s.get("file")))
+assert sorted(parts) == ["0", "1"], parts.keys()
+for part in parts.values():
+    times = [t for t, _ in part]
+    assert len(times) >= 2 and all(a < b for a, b in zip(times, times[1:])), f"times not increasing: {times}"
+try:
+    import vtk
+except ImportError as e:
+    print(f"no vtk module ({e}): pip install vtk"); sys.exit(3)
+def read(f):
+    r = vtk.vtkXMLPolyDataReader(); r.SetFileName(os.path.join(os.path.dirname(pvd), f)); r.Update()
+    assert r.GetErrorCode() == 0, f
+    out = r.GetOutput(); pd = out.GetPointData()
+    arrays = {pd.GetArrayName(i): pd.GetArray(i).GetNumberOfComponents() for i in range(pd.GetNumberOfArrays())}
+    return out, arrays, out.GetFieldData().GetArray("TimeValue").GetValue(0)
+contacts = 0
+for (t, f), (_, g) in zip(parts["0"], parts["1"]):
+    line, arrays, time = read(f)
+    assert line.GetNumberOfPoints() == nodes and line.GetNumberOfLines() == 1, (f, line.GetNumberOfPoints())
+    assert arrays == {"radius": 1, "twist_rate": 1, "curvature": 1, "velocity": 3}, (f, arrays)
+    assert time == t, (f, time, t)
+    points, arrays, _ = read(g)
+    assert points.GetNumberOfVerts() == points.GetNumberOfPoints(), g
+    assert arrays == {"stick": 1, "normal_force": 3, "friction_force": 3}, (g, arrays)
+    contacts += points.GetNumberOfPoints()
+assert contacts > 0, "no contact in any frame"
+print(f"vtk {vtk.vtkVersion.GetVTKVersion()} read {len(sets)} files: {nodes} points per centre line, {contacts} contacts")
+"#;
+
+/// Runs [`CHECK`] (panicking on a failed check, printing why when skipped).
+fn check(pvd: &Path, nodes: usize, zip: Option<&Path>) {
+    let mut cmd = Command::new("python3");
+    cmd.args(["-c", CHECK]).arg(pvd).arg(nodes.to_string()).args(zip);
+    let out = match cmd.output() {
+        Ok(out) => out,
+        Err(e) => return println!("skipped: no python3 ({e})"),
+    };
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    match out.status.code() {
+        Some(0) => println!("{text}"),
+        Some(3) => println!("VTK readers skipped: {text}"),
+        _ => panic!("the VTK files do not read back: {text}"),
+    }
+}
+
+#[test]
+fn run_vtk_files_read_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_knotsweep"))
+        .args([
+            "run",
+            "--n",
+            "1",
+            "--length",
+            "0.3",
+            "--nodes",
+            "102",
+            "--relax-time",
+            "0.1",
+        ])
+        .args(["--pull-speed", "0.01", "--min-l-k-bar", "100", "--out"])
+        .arg(dir.path().join("tiny.json"))
+        .arg("--vtk")
+        .arg(dir.path().join("vtk"))
+        .status()
+        .expect("knotsweep runs");
+    assert!(status.success());
+    check(&dir.path().join("vtk/tiny.pvd"), 102, None);
+}
+
+#[tokio::test]
+async fn frames_zip_reads_back() {
+    let (dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let (status, _) = get_text(&c, &format!("{url}/api/cases/999/frames.zip")).await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    let base = with(tiny_base(), serde_json::json!({"min_l_k_bar": 115.0}));
+    let id = submit_sweep(&c, &url, &serde_json::json!({ "base": base })).await;
+    let sweep = wait_sweep(&c, &url, id, std::time::Duration::from_secs(300), finished).await;
+    let case = case_ids(&sweep)[0];
+    let r = c
+        .get(format!("{url}/api/cases/{case}/frames.zip"))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status(), StatusCode::OK);
+    assert_eq!(r.headers()["content-type"], "application/zip");
+    let zip = dir.path().join("frames.zip");
+    std::fs::write(&zip, r.bytes().await.unwrap()).unwrap();
+    check(&dir.path().join(format!("case-{case}.pvd")), 121, Some(&zip));
+    server.shutdown().await.unwrap();
+}

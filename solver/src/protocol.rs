@@ -220,7 +220,7 @@ pub struct Progress {
 const MAX_PENETRATION: f64 = 0.5;
 /// Frames kept around the newest sample for the inversion snapshots.
 const FRAME_HISTORY: usize = 40;
-/// Stored frames (the report's size budget, about 20 kB each at K = 301): one
+/// Stored frames (the report's size budget, about 50 kB each at K = 301): one
 /// every `FRAME_SPACING` in l_k bar along the pull, and every
 /// `SNAP_FRAME_SPACING` within `SNAP_WINDOW` either side of the inversion, so
 /// that a viewer steps through the snap (about 40 frames in all).

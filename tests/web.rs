@@ -1,6 +1,7 @@
 //! The web page in a real browser: Debian's chromium driven through
-//! chromedriver (WebDriver over HTTP). Submit a custom sweep through the form,
-//! watch it finish, see its curves and phase diagram, open a case's 3D knot and
+//! chromedriver (WebDriver over HTTP). Submit a certified custom sweep through
+//! the form, watch it finish, see its curves and phase diagram (with the
+//! refined twins' error bars), open a case's 3D knot and
 //! move the frame slider, cancel a sweep from the list, and get a field error
 //! for a bad value. Screenshots land in `target/tmp/web-*.png`. Skipped, with
 //! the reason, when chromium or chromedriver is not installed.
@@ -195,17 +196,27 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
             Duration::from_secs(20),
         )
         .await;
-    let base = tiny_base();
+    // Pulled on to l_k bar 105: mu = 0.1 inverts near 116 in about a second,
+    // and so does its refined twin; at mu = 0.05 only the point does.
+    let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
     let mut fields = serde_json::Map::new();
     for (k, v) in base.as_object().unwrap() {
         fields.insert(format!("p-{k}"), json!(v.to_string()));
     }
-    fields.insert("g-mu".into(), json!("0.3, 0.5"));
+    fields.insert("g-mu".into(), json!("0.05, 0.1"));
     browser.js(FILL, json!([fields])).await;
     let count = browser
         .js("return document.getElementById('count').textContent", json!([]))
         .await;
     assert_eq!(count, "2 cases", "live case count");
+    // Certified: each case also runs its refined twin.
+    let count = browser
+        .js(
+            "document.getElementById('certify').click(); return document.getElementById('count').textContent",
+            json!([]),
+        )
+        .await;
+    assert_eq!(count, "4 cases: 2 points and their refined twins");
     browser
         .js(
             "document.querySelector('#custom button[type=submit]').click(); return true",
@@ -228,8 +239,9 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .parse()
         .unwrap();
     let (_, sweep) = get_sweep(&c, &url, id).await;
-    assert_eq!(sweep["total"], 2);
+    assert_eq!(sweep["total"], 4, "2 points and 2 twins");
     assert_eq!(sweep["spec"]["base"]["h"], json!(5e-3), "{sweep:#}");
+    assert_eq!(sweep["spec"]["certify"], true, "{sweep:#}");
 
     // Progress moves to the end; the curves and the phase diagram appear.
     let first = browser
@@ -241,7 +253,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .await;
     browser
         .until(
-            "two curves per plot",
+            "two curves per plot (the twins draw none)",
             "const f = document.getElementById('plot-f'); return f && f.dataset.series === '2' && document.getElementById('plot-h').dataset.series === '2'",
             Duration::from_secs(120),
         )
@@ -269,6 +281,37 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .unwrap();
     assert_eq!(hollow, json!(loaded.to_string()), "hollow points: {note}");
     assert_eq!(note.contains("F bar does not fall"), loaded > 0, "{note}");
+    // Certified: an error bar on every point whose twin inverted too, a red
+    // ring on the unconverged ones, and the twins marked in the case table.
+    let (bars, unconverged) = sweep_uncertainties(&c, &url, id).await;
+    assert!(bars > 0, "no point with an uncertainty");
+    let shown = browser
+        .until(
+            "the error bars",
+            &format!("const p = document.getElementById('phase'); return p.dataset.errorbars === '{bars}' && [p.dataset.errorbars, p.dataset.unconverged, document.getElementById('phase-note').textContent]"),
+            Duration::from_secs(20),
+        )
+        .await;
+    assert_eq!(shown[1], json!(unconverged.to_string()), "{shown}");
+    assert_eq!(
+        shown[2].as_str().unwrap().contains("Unconverged"),
+        unconverged > 0,
+        "{shown}"
+    );
+    let twins = browser
+        .js(
+            "return [...document.querySelectorAll('#cases tr.twin')].map((r) => r.textContent)",
+            json!([]),
+        )
+        .await;
+    let twins = twins.as_array().unwrap();
+    assert_eq!(twins.len(), 2, "{twins:?}");
+    assert!(
+        twins
+            .iter()
+            .all(|t| t.as_str().unwrap().contains("refined twin of #")),
+        "{twins:?}"
+    );
     let canvases = browser
         .js(
             "return document.querySelectorAll('#main canvas').length",
@@ -280,6 +323,13 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         "F, H and phase plots: {canvases}"
     );
     browser.screenshot("sweep").await;
+    browser
+        .js(
+            "document.getElementById('phase-h').scrollIntoView(); return true",
+            json!([]),
+        )
+        .await;
+    browser.screenshot("phase").await;
 
     // The case page: a 3D knot that is drawn, and a slider that changes the frame.
     browser
@@ -391,4 +441,21 @@ async fn sweep_inversions(c: &reqwest::Client, url: &str, id: i64) -> (usize, us
         .filter(|i| i["F_bar_after"].as_f64() >= i["F_bar_before"].as_f64())
         .count();
     (inverted.len(), loaded)
+}
+
+/// Points of the sweep with an error bar (both the point and its refined twin
+/// inverted), and the inverted points flagged as unconverged.
+async fn sweep_uncertainties(c: &reqwest::Client, url: &str, id: i64) -> (usize, usize) {
+    let (_, pd) = get(c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(pd["certified"], true, "{pd:#}");
+    let inverted: Vec<&Value> = pd["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| !p["inversion"].is_null())
+        .map(|p| &p["uncertainty"])
+        .collect();
+    let bars = inverted.iter().filter(|u| !u["absolute"].is_null()).count();
+    let unconverged = inverted.iter().filter(|u| u["converged"] == false).count();
+    (bars, unconverged)
 }

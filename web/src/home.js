@@ -22,6 +22,8 @@ export async function home(main) {
     </section>
     <section aria-labelledby="submit-h">
       <h1 id="submit-h">Submit a sweep</h1>
+      <p class="certify"><input id="certify" type="checkbox"> <label for="certify">Certify every point: also run a refined
+        twin (time step halved) of each case and show the inversion's numerical uncertainty (about 3x the cost)</label></p>
       <h2>The paper's phase diagrams</h2>
       <div id="presets" class="presets">Loading presets…</div>
       <h2>Your own</h2>
@@ -38,6 +40,10 @@ export async function home(main) {
     </section>`;
   $("#prev").onclick = () => { offset = Math.max(0, offset - PAGE); refresh(); };
   $("#next").onclick = () => { offset += PAGE; refresh(); };
+  $("#certify").onchange = () => {
+    presetCounts();
+    $("#custom").dispatchEvent(new Event("input"));
+  };
   await Promise.all([presets(), form(), refresh()]);
   clearInterval(timer);
   timer = setInterval(() => { if (location.hash === "" || location.hash === "#/") refresh(); else clearInterval(timer); }, 3000);
@@ -97,15 +103,31 @@ async function control(id, action) {
   refresh();
 }
 
+/** The "certify" checkbox is ticked: every case gets its refined twin. */
+const certify = () => $("#certify")?.checked === true;
+
+/** "N cases", or with certify "2N cases: N points and their refined twins". */
+function cases(n) {
+  const plural = (k, word) => `${k} ${word}${k === 1 ? "" : "s"}`;
+  return certify() ? `${plural(2 * n, "case")}: ${plural(n, "point")} and ${n === 1 ? "its" : "their"} refined twin${n === 1 ? "" : "s"}` : plural(n, "case");
+}
+
+function presetCounts() {
+  for (const s of document.querySelectorAll("#presets [data-cases]")) s.textContent = cases(Number(s.dataset.cases));
+}
+
 async function presets() {
   const list = await get("/api/presets");
   $("#presets").innerHTML = list.map((p) =>
-    `<button type="button" data-preset="${esc(p.name)}">${esc(p.name)}</button> <span>${esc(p.description)} (${p.cases} cases)</span>`
+    `<button type="button" data-preset="${esc(p.name)}">${esc(p.name)}</button> <span>${esc(p.description)} (<span data-cases="${p.cases}"></span>)</span>`
   ).join("<br>");
+  presetCounts();
   for (const b of document.querySelectorAll("#presets button")) {
     b.onclick = async () => {
       try {
-        const r = await api("POST", "/api/sweeps", { preset: b.dataset.preset });
+        const body = { preset: b.dataset.preset };
+        if (certify()) body.certify = true;
+        const r = await api("POST", "/api/sweeps", body);
         location.hash = `#/sweeps/${r.body.id}`;
       } catch (e) {
         notice(e.message);
@@ -194,7 +216,7 @@ async function form() {
         bad = true;
       }
     }
-    $("#count").textContent = bad ? "fix the grid" : `${n} case${n === 1 ? "" : "s"}`;
+    $("#count").textContent = bad ? "fix the grid" : cases(n);
   };
   f.oninput = count;
   count();
@@ -210,6 +232,7 @@ async function form() {
       if (a) grid[p.name] = a;
     }
     const body = { base, grid };
+    if (certify()) body.certify = true;
     const name = $("#sweep-name").value.trim();
     if (name) body.name = name;
     try {

@@ -1,6 +1,7 @@
 // A sweep: live progress (server-sent events), F bar and H bar of every
 // finished case overlaid (paper Figs 6/8/10 a, b), the phase diagram
-// (Figs 7/9/11), the cases, and downloads.
+// (Figs 7/9/11; a certified sweep's with error bars from the refined twins),
+// the cases, and downloads.
 import { api, get } from "./api.js";
 import { esc, fmt, duration, when, notice, colour, download, $ } from "./util.js";
 import { overlay, scatter } from "./plot.js";
@@ -47,18 +48,28 @@ export async function sweepPage(main, id) {
 
 async function refresh(state) {
   const { id } = state;
-  let sweep, cases;
+  let sweep, all, pd;
   try {
-    [sweep, cases] = await Promise.all([get(`/api/sweeps/${id}`), get(`/api/sweeps/${id}/cases?limit=1000`)]);
+    [sweep, all, pd] = await Promise.all([
+      get(`/api/sweeps/${id}`), get(`/api/sweeps/${id}/cases?limit=1000`), get(`/api/sweeps/${id}/phase-diagram`),
+    ]);
   } catch (e) {
     notice(e.message);
     return;
   }
+  // A certified sweep's refined twins (time step halved) are cases too: listed
+  // after their point, not drawn as points or curves of their own.
+  const pointIds = new Set(pd.points.map((p) => p.case_id));
+  const isTwin = (c) => c.twin_of !== null && c.twin_of !== undefined && !pointIds.has(c.case_id);
+  const cases = all.filter((c) => !isTwin(c));
+  const twinsOf = new Map();
+  for (const c of all.filter(isTwin)) twinsOf.set(c.twin_of, [...(twinsOf.get(c.twin_of) || []), c]);
+  const uncertaintyOf = new Map(pd.points.map((p) => [p.case_id, settled(p)]));
   $("#title").textContent = `Sweep #${sweep.id} ${sweep.name || sweep.preset || ""}`;
   const counts = Object.entries(sweep.counts).map(([k, v]) => `${esc(k)} ${v}`).join(", ");
   $("#summary").innerHTML = `<p><span class="status s-${esc(sweep.status)}">${esc(sweep.status)}</span>
     <progress max="1" value="${sweep.progress}" aria-label="sweep progress"></progress> ${fmt(100 * sweep.progress, 0)} %
-    · ETA ${duration(sweep.eta_seconds)} · ${sweep.total} cases (${counts}) · varied: ${esc(sweep.varied.join(", ") || "none")}
+    · ETA ${duration(sweep.eta_seconds)} · ${sweep.total} cases (${counts})${pd.certified ? ` · certified: ${cases.length} points and their refined twins` : ""} · varied: ${esc(sweep.varied.join(", ") || "none")}
     · created ${when(sweep.created_at)}</p>`;
   const live = sweep.state !== "cancelled" && sweep.status !== "done";
   $("#actions").innerHTML = live
@@ -72,12 +83,21 @@ async function refresh(state) {
     };
   }
   const axisName = sweep.varied[0];
-  $("#cases").innerHTML = cases.map((c, i) => `<tr>
-    <td><a href="#/cases/${c.case_id}"><span class="swatch" style="background:${colour(i)}"></span>case ${c.case_id}</a></td>
-    <td>${esc(Object.entries(c.params).map(([k, v]) => `${k} = ${v}`).join(", "))}</td>
+  const params = (c) => esc(Object.entries(c.params).map(([k, v]) => `${k} = ${v}`).join(", "));
+  const rest = (c, inversion) => `
     <td><span class="status s-${esc(c.status)}">${esc(c.status)}</span>${c.reason ? ` <span class="hint">${esc(c.reason)}</span>` : ""}</td>
     <td><progress max="1" value="${c.progress}" aria-label="case ${c.case_id} progress"></progress></td>
-    <td>${c.inversion ? fmt(c.inversion.l_k_bar) : "–"}</td><td>${c.wall_time ? duration(c.wall_time) : "–"}</td></tr>`).join("");
+    <td>${inversion}</td><td>${c.wall_time ? duration(c.wall_time) : "–"}</td></tr>`;
+  const plusMinus = (c) => {
+    const u = uncertaintyOf.get(c.case_id);
+    return u && u.absolute !== null ? ` ± ${fmt(u.absolute, 2)}` : "";
+  };
+  $("#cases").innerHTML = cases.map((c, i) => `<tr>
+    <td><a href="#/cases/${c.case_id}"><span class="swatch" style="background:${colour(i)}"></span>case ${c.case_id}</a></td>
+    <td>${params(c)}</td>${rest(c, c.inversion ? fmt(c.inversion.l_k_bar) + plusMinus(c) : "–")}` +
+    (twinsOf.get(c.case_id) || []).map((t) => `<tr class="twin">
+    <td><a href="#/cases/${t.case_id}">case ${t.case_id}</a> <span class="twin-of">refined twin of #${c.case_id}</span></td>
+    <td>${params(t)}, time step halved</td>${rest(t, t.inversion ? fmt(t.inversion.l_k_bar) : "–")}`).join("")).join("");
   // Curves of the finished cases (fetched once each).
   const finished = cases.slice(0, MAX_CURVES).filter((c) => c.progress >= 1 || c.wall_time);
   await Promise.all(finished.filter((c) => !state.seriesOf.has(c.case_id)).map(async (c) => {
@@ -101,7 +121,6 @@ async function refresh(state) {
       $("#plot-f").textContent = "Curves appear as cases finish.";
     }
   }
-  const pd = await get(`/api/sweeps/${id}/phase-diagram`);
   if (axisName) {
     const scale = axisName === "h" ? 1e3 : 1;
     // Snaps nearly always release the pull (F bar falls). An event through which
@@ -116,6 +135,11 @@ async function refresh(state) {
     const reference = axisName === "n" || axisName === "h"
       ? pd.points.filter((p) => p.simplified_l_k_bar !== null).map((p) => [Number(p.params[axisName]) * scale, p.simplified_l_k_bar])
       : [];
+    // Certified: l_k bar +- |refined twin - point|, and a red ring where they
+    // differ by more than 2 % (or only one of the two inverts).
+    const errors = inverted.filter((p) => settled(p) && p.uncertainty.absolute !== null)
+      .map((p) => [...at(p), p.uncertainty.absolute]);
+    const unconverged = inverted.filter((p) => settled(p) && p.uncertainty.converged === false).map(at);
     scatter($("#phase"), {
       title: `critical l_k bar against ${axisName}${axisName === "h" ? " (mm)" : ""}`,
       x: axisName === "h" ? "h (mm)" : axisName,
@@ -123,6 +147,8 @@ async function refresh(state) {
       points,
       loaded,
       reference,
+      errors,
+      unconverged,
     });
     const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
     const held = inverted.filter(rising).map((p) => `${axisName} = ${p.params[axisName]} (F bar × ${fmt(p.inversion.F_bar_after / p.inversion.F_bar_before, 3)}, kinetic energy × ${fmt(p.inversion.kinetic_energy_ratio, 1)})`);
@@ -132,13 +158,39 @@ async function refresh(state) {
       : "";
     $("#phase-note").textContent = [
       friction,
+      certification(pd, (p) => `${axisName} = ${p.params[axisName]}`),
       none.length ? "Without an inversion: " + none.join("; ") + "." : "",
       held.length ? "F bar does not fall through the event at " + held.join("; ") +
         ". A kinetic energy tens of times its median marks a snap; 5-10 times marks a loop lying down while the pull keeps loading it (docs/FIDELITY.md)." : "",
     ].filter(Boolean).join(" ");
   } else {
-    $("#phase").textContent = pd.points[0] && pd.points[0].inversion ? `Inversion at l_k bar ${fmt(pd.points[0].inversion.l_k_bar)}` : "A single case: no axis to plot.";
+    const p = pd.points[0];
+    $("#phase").textContent = p && p.inversion ? `Inversion at l_k bar ${fmt(p.inversion.l_k_bar)}${plusMinus(p)}` : "A single case: no axis to plot.";
+    $("#phase-note").textContent = certification(pd, () => "the case");
   }
+}
+
+/** A point's uncertainty once both it and its refined twin have finished, else null. */
+function settled(p) {
+  const u = p.uncertainty;
+  return u && u.converged !== null && p.status !== "queued" && p.status !== "running" ? u : null;
+}
+
+/** The note on a certified sweep's uncertainties: the unconverged points, and the twins still running. */
+function certification(pd, name) {
+  if (!pd.certified) return "";
+  const pending = pd.points.filter((p) => !settled(p)).length;
+  const why = (u) => u.relative !== null ? `the refined twin differs by ${fmt(100 * u.relative, 1)} %`
+    : u.refined_l_k_bar !== null ? "only the refined twin inverts" : "the refined twin does not invert";
+  const flagged = pd.points.filter((p) => settled(p) && p.uncertainty.converged === false)
+    .map((p) => `${name(p)} (${why(p.uncertainty)})`);
+  return [
+    "Certified: error bars are ± the change of the inversion's l_k bar when the time step is halved (each point's refined twin).",
+    flagged.length ? `Unconverged (ringed red: more than 2 % apart, or only one of the two inverts): ${flagged.join("; ")}.` : "",
+    !pending ? "" : pd.complete ? `Without an uncertainty: ${pending} of ${pd.points.length} points (they or their refined twins have no result).`
+      : `Still running: ${pending} of ${pd.points.length} points or their refined twins; the error bars appear as both finish.`,
+    pending || flagged.length ? "" : "Every point converged within 2 %.",
+  ].filter(Boolean).join(" ");
 }
 
 async function allSeries(state) {

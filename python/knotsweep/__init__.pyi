@@ -309,8 +309,10 @@ class Client:
         grid: dict[str, list[Any]] | None = None,
         name: str | None = None,
         idempotency_key: str | None = None,
+        certify: bool = False,
     ) -> Sweep:
-        """Submits a sweep: a preset, or a base case and a grid; raises InvalidInput with the API's message."""
+        """Submits a sweep: a preset, or a base case and a grid (certify: also each case's refined twin, giving
+        every point its numerical uncertainty); raises InvalidInput with the API's message."""
     def sweep(self, sweep_id: int) -> Sweep: ...
     def sweeps(self) -> list[dict[str, Any]]: ...
     def presets(self) -> list[dict[str, Any]]: ...

@@ -127,16 +127,21 @@ class Client:
         grid: dict[str, list] | None = None,
         name: str | None = None,
         idempotency_key: str | None = None,
+        certify: bool = False,
     ) -> Sweep:
         """Submits a sweep: a ``preset`` (``fig7``, ``fig9``, ``fig11``; ``base``
         overrides its base) or a ``base`` case and a ``grid`` (parameter name
-        -> list of values; the cartesian product). A retry with the same
-        ``idempotency_key`` returns the first sweep. Raises InvalidInput (a
-        ValueError) with the API's message and fields."""
+        -> list of values; the cartesian product). ``certify=True`` also runs
+        each case's refined twin (time step halved) so that every point of the
+        phase diagram gets its numerical uncertainty (about 3x the cost). A
+        retry with the same ``idempotency_key`` returns the first sweep. Raises
+        InvalidInput (a ValueError) with the API's message and fields."""
         spec: dict[str, Any] = {}
         for key, value in (("name", name), ("preset", preset), ("base", base), ("grid", grid)):
             if value is not None:
                 spec[key] = value
+        if certify:
+            spec["certify"] = True
         headers = {"Idempotency-Key": idempotency_key} if idempotency_key else None
         answer = self._post("/api/sweeps", spec, headers).json()
         return Sweep(self, answer["id"], answer)
@@ -269,16 +274,21 @@ class Sweep:
         """The phase diagram as a pandas DataFrame, one row per case in grid
         order: ``case_id``, the varied parameters, ``status``, the inversion's
         fields (``l_k_bar``, ``l_c_over_l``, ``F_bar_before``, ...; NaN without
-        one), ``simplified_l_k_bar`` (the simplified model's snap) and
-        ``reason``; ``df.attrs`` holds the sweep's ``varied``, ``base``,
-        ``preset``, ``complete``, ``solver_version`` and ``physics_revision``.
-        ``raw=True``: the API's JSON as a dict."""
+        one), ``simplified_l_k_bar`` (the simplified model's snap),
+        ``reason`` and, for a certified sweep, ``refined_l_k_bar``,
+        ``uncertainty`` (|refined - default| in l_k bar),
+        ``relative_uncertainty`` and ``converged`` (relative <= 2 %);
+        ``df.attrs`` holds the sweep's ``varied``, ``base``, ``preset``,
+        ``complete``, ``certified``, ``solver_version`` and
+        ``physics_revision``. ``raw=True``: the API's JSON as a dict."""
         diagram = self.client._get(f"/api/sweeps/{self.id}/phase-diagram").json()
         if raw:
             return diagram
         pd = _require_pandas("phase_diagram")
         fields = ["l_k_bar", "l_c_over_l", "F_bar_before", "F_bar_after", "h_bar_before",
                   "h_bar_after", "kinetic_energy_ratio"]
+        certified_columns = [("refined_l_k_bar", "refined_l_k_bar"), ("uncertainty", "absolute"),
+                             ("relative_uncertainty", "relative"), ("converged", "converged")]
         rows = []
         for point in diagram["points"]:
             inversion = point.get("inversion") or {}
@@ -289,11 +299,18 @@ class Sweep:
             simplified = point.get("simplified_l_k_bar")
             row["simplified_l_k_bar"] = np.nan if simplified is None else simplified
             row["reason"] = point.get("reason")
+            uncertainty = point.get("uncertainty") or {}
+            for column, key in certified_columns:
+                value = uncertainty.get(key)
+                row[column] = np.nan if value is None else value
             rows.append(row)
+        certified = bool(diagram.get("certified"))
         columns = ["case_id", *diagram["varied"], "status", *fields, "simplified_l_k_bar", "reason"]
+        if certified:
+            columns += [column for column, _ in certified_columns]
         df = pd.DataFrame(rows, columns=columns)
         df.attrs.update({k: diagram.get(k) for k in (
-            "sweep_id", "name", "preset", "status", "complete", "varied", "base",
+            "sweep_id", "name", "preset", "status", "complete", "certified", "varied", "base",
             "solver_version", "physics_revision")})
         return df
 

@@ -37,6 +37,18 @@ def test_submit_wait_and_read_the_phase_diagram(client):
     assert np.allclose(mine.series["F_bar"], raw["F_bar"], rtol=1e-15, atol=0)
 
 
+def test_a_certified_sweep_gives_each_point_its_uncertainty(client):
+    pytest.importorskip("pandas")
+    sweep = client.submit(base=QUICK, grid={"mu": [0.3]}, certify=True)
+    assert sweep.submitted["total"] == 2, "the point and its refined twin"
+    assert sweep.wait(timeout=600)["status"] == "done"
+    df = sweep.phase_diagram()
+    assert df.attrs["certified"] and len(df) == 1
+    assert {"refined_l_k_bar", "uncertainty", "relative_uncertainty", "converged"} <= set(df.columns)
+    twin = [c for c in sweep.cases() if c["twin_of"] is not None]
+    assert [c["twin_of"] for c in twin] == list(df["case_id"])
+
+
 def test_api_errors_are_exceptions_with_the_apis_words(client, server):
     with pytest.raises(knotsweep.InvalidInput) as e:
         client.submit(base={"mu": -1.0})

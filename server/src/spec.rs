@@ -110,7 +110,6 @@ fn numbers(values: &[f64]) -> Vec<Value> {
 /// pull at every one of their cases at about a tenth of its cost
 /// (BENCHMARKS.md, "Physics revision 6"); a case's F bar series away from
 /// the snap is then the fast approach's (5-20 % high).
-
 pub fn presets() -> Vec<Preset> {
     let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
         let base = base.as_object().cloned().unwrap_or_default();

@@ -500,21 +500,22 @@ pub fn points<'a>(record: &SweepRecord, cases: &'a [SweepCase]) -> (Vec<Point<'a
 pub struct UncertaintyView {
     /// The refined twin (time step halved).
     pub refined_case_id: i64,
-    /// The twin's inversion l_k bar (null without one or before its result).
+    /// The twin's inversion l_k bar (null without one, or until both have a result).
     pub refined_l_k_bar: Option<f64>,
     /// |refined - default| in l_k bar (null unless both inverted).
     pub absolute: Option<f64>,
     /// `absolute` over the point's l_k bar.
     pub relative: Option<f64>,
     /// `relative` <= 2 % (`solver::certify::CONVERGED_WITHIN`); false when
-    /// only one of the two inverted; null before the twin's result.
+    /// only one of the two inverted; null until both have a result.
     pub converged: Option<bool>,
 }
 
 impl UncertaintyView {
     fn new(point: &CaseRecord, twin: &CaseRecord) -> Self {
         let inversion = |c: &CaseRecord| c.result.as_ref().and_then(|r| r.inversion);
-        let refined = twin.result.as_ref().map(|_| inversion(twin));
+        // Compared only once both have a result (the twin may finish first).
+        let refined = (point.result.is_some() && twin.result.is_some()).then(|| inversion(twin));
         let u = solver::certify::Uncertainty::new(
             inversion(point).as_ref(),
             refined.as_ref().map(Option::as_ref),

@@ -42,7 +42,7 @@ fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
     let run = |protocol| {
         let params = CaseParams {
             nodes: 158,
-            mu: 0.3,
+            mu: 0.8,
             min_l_k_bar: 420.0,
             protocol,
             ..CaseParams::default()
@@ -51,7 +51,7 @@ fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
     };
     let reference = run(Protocol::Reference);
     let adaptive = run(Protocol::Adaptive);
-    const { assert!(0.3 > protocol::ADAPTIVE_MAX_MU) };
+    const { assert!(0.8 > protocol::ADAPTIVE_MAX_MU) };
     assert_eq!(adaptive.status, Status::Completed, "{}", adaptive.reason);
     assert!(adaptive.series.len() > 10, "{} samples", adaptive.series.len());
     assert_eq!(adaptive.series, reference.series);

@@ -495,12 +495,13 @@ fn ms(d: Duration) -> i64 {
 mod tests {
     use super::*;
 
-    /// Fig. 11's sweep under the adaptive protocol: the cases above
+    /// A friction sweep under the adaptive protocol: the cases above
     /// `ADAPTIVE_MAX_MU` run the whole pull slowly and join the queue first,
     /// the rest keep their grid order, and every case keeps its grid position.
     #[test]
     fn queue_order_puts_slow_cases_first() {
-        let cases = [0.1, 0.4, 0.2, 0.6]
+        const { assert!(0.8 > solver::protocol::ADAPTIVE_MAX_MU) };
+        let cases = [0.1, 0.8, 0.2, 0.9]
             .map(|mu| {
                 NewCase::new(CaseParams {
                     mu,
@@ -522,7 +523,7 @@ mod tests {
             .iter()
             .map(|(p, c)| (*p, c.params.mu))
             .collect();
-        assert_eq!(order, [(1, 0.4), (3, 0.6), (0, 0.1), (2, 0.2)]);
+        assert_eq!(order, [(1, 0.8), (3, 0.9), (0, 0.1), (2, 0.2)]);
     }
 
     #[test]

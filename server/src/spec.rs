@@ -106,7 +106,7 @@ fn numbers(values: &[f64]) -> Vec<Value> {
 }
 
 /// The presets: the paper's Figs 7, 9 and 11. They measure inversion points,
-/// so they pull with the adaptive protocol: within 0.5 % of the reference
+/// so they pull with the adaptive protocol: within 0.6 % of the reference
 /// pull at every one of their cases at about a tenth of its cost
 /// (BENCHMARKS.md, "Physics revision 6"); a case's F bar series away from
 /// the snap is then the fast approach's (5-20 % high).

@@ -111,12 +111,15 @@ const FALSE_ALARM: f64 = 10.0;
 /// the snap speed when the fast approach reaches it without a snap (its lag
 /// and swinging may hide one there).
 const END_REVIEW: f64 = 20.0;
-/// [`Protocol::Adaptive`]: a fall of H bar to this fraction of its largest
-/// value within `SMEARED_WINDOW` (l_k bar) is a snap the fast approach
-/// smeared out ([`smeared_snap`]). Steady tightening lowers H bar by about
-/// 10 % over that distance (n = 3: 0.59 at l_k bar 431 to 0.24 at 141).
-const SMEARED_FALL: f64 = 0.5;
+/// [`Protocol::Adaptive`]: a fall of H bar to `SMEARED_FALL` of its largest
+/// value within `SMEARED_WINDOW` (l_k bar), from `SMEARED_START` of it over
+/// more than `SMEARED_SPAN`, is a snap the fast approach smeared out
+/// ([`smeared_snap`]). Steady tightening lowers H bar by about 10 % over the
+/// window (n = 3: 0.59 at l_k bar 431 to 0.24 at 141).
+const SMEARED_FALL: f64 = 0.4;
+const SMEARED_START: f64 = 0.9;
 const SMEARED_WINDOW: f64 = 20.0;
+const SMEARED_SPAN: f64 = 5.0;
 /// [`Protocol::Adaptive`]: checkpoints kept (they span several retries of
 /// `RESTART_BEFORE`).
 const CHECKPOINTS: usize = 24;
@@ -501,19 +504,22 @@ impl Stage {
 
 /// A snap the damped fast approach smeared out: H bar has fallen below
 /// `SMEARED_FALL` of its largest value within the last `SMEARED_WINDOW` of
-/// l_k bar. Returns where that largest value was (the fold lies after it) and
-/// where H bar is now. The damping slows the snap down while the clamps go on
-/// moving, so that it spans several samples without the sudden drop that
-/// [`measurements::detect_inversion`] looks for (n = 5: H bar 0.18 -> 0.03
-/// over 25 l_k bar, where the reference pull snaps at once).
+/// l_k bar, over more than `SMEARED_SPAN` (a sudden drop is
+/// [`measurements::detect_inversion`]'s). Returns where the fall began (the
+/// last sample within `SMEARED_START` of that largest value: the fold lies
+/// after it) and where H bar is now. The damping slows the snap down while the
+/// clamps go on moving, so that it spans many samples without the sudden drop
+/// that detection looks for (n = 5: H bar 0.18 -> 0.07 over about 20 l_k bar, where
+/// the reference pull snaps at once).
 fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
     let last = series.last().filter(|s| s.h_bar > 0.0)?;
-    let peak = series
-        .iter()
-        .rev()
-        .take_while(|s| s.l_k_bar <= last.l_k_bar + SMEARED_WINDOW)
-        .max_by(|a, b| a.h_bar.total_cmp(&b.h_bar))?;
-    (last.h_bar < SMEARED_FALL * peak.h_bar).then_some((peak.l_k_bar, last.l_k_bar))
+    let window = || (series.iter().rev()).take_while(|s| s.l_k_bar <= last.l_k_bar + SMEARED_WINDOW);
+    let peak = window().map(|s| s.h_bar).fold(0.0, f64::max);
+    if last.h_bar >= SMEARED_FALL * peak {
+        return None;
+    }
+    let began = window().find(|s| s.h_bar >= SMEARED_START * peak)?.l_k_bar;
+    (began - last.l_k_bar > SMEARED_SPAN).then_some((began, last.l_k_bar))
 }
 
 /// From the snap speed (0) to the fast one (1).
@@ -1077,7 +1083,39 @@ fn finish(
 
 #[cfg(test)]
 mod tests {
-    use super::{Protocol, Stage, Status};
+    use super::{Protocol, Stage, Status, smeared_snap};
+    use crate::measurements::Sample;
+
+    /// Samples every 0.5 in l_k bar from 300 down, H bar from `h`.
+    fn series(h: impl Fn(f64) -> f64) -> Vec<Sample> {
+        (0..60)
+            .map(|i| 300.0 - 0.5 * f64::from(i))
+            .map(|l_k_bar| Sample {
+                l_k_bar,
+                h_bar: h(l_k_bar),
+                ..Sample::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_fall_of_h_bar_spread_over_many_samples_is_a_smeared_snap() {
+        // Steady at 0.2 down to 290, then falling linearly to 0.02 at 272.
+        let smeared = series(|l| if l > 290.0 { 0.2 } else { 0.2 - 0.01 * (290.0 - l) });
+        let (began, now) = smeared_snap(&smeared).expect("a smeared snap");
+        assert_eq!(now, 270.5);
+        assert!(
+            (began - 288.0).abs() < 0.01,
+            "the last sample within 0.9 of the peak: {began}"
+        );
+        // A sudden drop is left to the inversion detection.
+        assert_eq!(
+            smeared_snap(&series(|l| if l > 275.0 { 0.2 } else { 0.05 })),
+            None
+        );
+        // Steady tightening: 10 % over the window.
+        assert_eq!(smeared_snap(&series(|l| 0.2 - 0.001 * (300.0 - l))), None);
+    }
 
     #[test]
     fn enum_words_are_the_serde_names() {

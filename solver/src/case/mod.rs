@@ -33,7 +33,8 @@ pub use table::{Bound, Parameter, Range};
 /// interval (docs/FIDELITY.md).
 /// Revision 6: the adaptive pull runs fast up to mu = 0.7 (was 0.2) and
 /// goes back to pull slowly through a snap its damped approach smeared out
-/// (`protocol::smeared_snap`); the reference pull is unchanged.
+/// (`protocol::smeared_snap`); the presets pull adaptively; the reference
+/// pull is unchanged.
 pub const PHYSICS_REVISION: u32 = 6;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).

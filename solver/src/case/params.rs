@@ -302,10 +302,10 @@ pub const PARAMETERS: &[Parameter] = &[
         doc: "How the clamps move: \"reference\" pulls at pull_speed throughout, as in the paper. \"adaptive\" ramps \
               up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far \
               from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the \
-              checkpoint 10 before it (further if the knot then snaps within 2; also when H bar halves within 20, \
-              a snap the damped approach smeared out), lets the knot settle and pulls through the snap at \
+              checkpoint 10 before it (further if the knot then snaps within 2; also when H bar falls to 0.4 within \
+              20, a snap the damped approach smeared out), lets the knot settle and pulls through the snap at \
               pull_speed; above mu = 0.7 (not measured) it pulls as \"reference\" does. Its inversion lies within \
-              0.3 % of the reference's at every preset case at a tenth of the cost, but its fast approach reads F \
+              0.6 % of the reference's at every preset case at a tenth of the cost, but its fast approach reads F \
               bar 5-20 % high (BENCHMARKS.md, \"Physics revision 6\"): the presets' protocol, not the curves'.",
         value: UNCHECKED,
     },

@@ -13,7 +13,7 @@ use knotsweep_worker::store::{
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use solver::protocol::{Progress, Status};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fmt::Write;
 use utoipa::ToSchema;
 
@@ -481,6 +481,10 @@ pub fn points<'a>(record: &SweepRecord, cases: &'a [SweepCase]) -> (Vec<Point<'a
     let spec: crate::spec::SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
     let count = crate::spec::points(&spec);
     let certified = spec.certify == Some(true);
+    let by_key: HashMap<&str, &SweepCase> = match certified {
+        true => cases.iter().map(|c| (c.case.key.as_str(), c)).collect(),
+        false => HashMap::new(),
+    };
     let points = cases
         .iter()
         .filter(|c| (c.position as usize) < count)
@@ -488,7 +492,7 @@ pub fn points<'a>(record: &SweepRecord, cases: &'a [SweepCase]) -> (Vec<Point<'a
             case,
             twin: certified
                 .then(|| knotsweep_worker::key::case_key(&solver::certify::refined(&case.case.params)))
-                .and_then(|key| cases.iter().find(|c| c.case.key == key)),
+                .and_then(|key| by_key.get(key.as_str()).copied()),
         })
         .collect();
     (points, certified)
@@ -556,18 +560,17 @@ impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
             eta_seconds,
             cached: cases.iter().filter(|c| c.cached).count() as i64,
             cases: {
+                // Twin case id -> its point's (a twin that is itself a point is listed as a point).
                 let (points, _) = points(record, cases);
-                let twin_of = |c: &SweepCase| {
-                    (points.iter())
-                        .find(|p| {
-                            p.twin.is_some_and(|t| t.case.id == c.case.id) && p.case.case.id != c.case.id
-                        })
-                        .map(|p| p.case.case.id)
-                };
+                let is_point: HashSet<i64> = points.iter().map(|p| p.case.case.id).collect();
+                let twin_of: HashMap<i64, i64> = (points.iter())
+                    .filter_map(|p| Some((p.twin?.case.id, p.case.case.id)))
+                    .filter(|(twin, _)| !is_point.contains(twin))
+                    .collect();
                 cases
                     .iter()
                     .map(|c| SweepCaseView {
-                        twin_of: twin_of(c),
+                        twin_of: twin_of.get(&c.case.id).copied(),
                         ..SweepCaseView::from((c, &record.varied[..]))
                     })
                     .collect()

@@ -1072,14 +1072,7 @@ async fn a_certified_sweep_runs_a_refined_twin_per_point_and_reports_its_uncerta
     let server = start(config(&db, 2)).await;
     let (url, c) = (server.url(), client());
     let spec = json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3]}, "certify": true});
-    let r = c
-        .post(format!("{url}/api/sweeps"))
-        .json(&spec)
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status(), StatusCode::CREATED);
-    let id = r.json::<Value>().await.unwrap()["id"].as_i64().unwrap();
+    let id = submit_sweep(&c, &url, &spec).await;
     let sweep = wait_sweep(&c, &url, id, Duration::from_secs(60), finished).await;
     assert_eq!(sweep["total"], 4, "two points and their twins: {sweep:#}");
     let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
@@ -1120,13 +1113,8 @@ async fn a_certified_sweep_runs_a_refined_twin_per_point_and_reports_its_uncerta
 
     // An uncertified sweep of the same points reuses them and has no uncertainty.
     let plain = json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.3]}});
-    let r = c
-        .post(format!("{url}/api/sweeps"))
-        .json(&plain)
-        .send()
-        .await
-        .unwrap();
-    let body: Value = r.json().await.unwrap();
+    let (status, body) = post(&c, &format!("{url}/api/sweeps"), &plain).await;
+    assert_eq!(status, StatusCode::CREATED);
     assert_eq!(body["cached"], 2, "{body:#}");
     let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{}/phase-diagram", body["id"])).await;
     assert_eq!(diagram["certified"], false);

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Value};
 use solver::case::{PARAMETERS, ParamError, Range, ValidCase};
-use solver::measurements::{CSV_HEADER, Sample};
+use solver::measurements::{COLUMNS, Column, Sample};
 use solver::protocol::{self, Progress, Status};
 use std::time::{Duration, Instant};
 
@@ -199,33 +199,14 @@ fn run<'py>(
 /// The series as numpy arrays, one per column of the series CSV, in its order.
 fn series_arrays<'py>(py: Python<'py>, series: &[Sample]) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
-    let floats = |f: fn(&Sample) -> f64| PyArray1::from_vec(py, series.iter().map(f).collect());
-    let counts = |f: fn(&Sample) -> i64| PyArray1::from_vec(py, series.iter().map(f).collect());
-    for column in CSV_HEADER.split(',') {
+    for (name, column) in COLUMNS {
         let array = match column {
-            "time" => floats(|s| s.time).into_any(),
-            "l_k_bar" => floats(|s| s.l_k_bar).into_any(),
-            "l_c_over_L" => floats(|s| s.l_c_over_l).into_any(),
-            "F" => floats(|s| s.force).into_any(),
-            "F_bar" => floats(|s| s.f_bar).into_any(),
-            "W" => floats(|s| s.width).into_any(),
-            "H" => floats(|s| s.height).into_any(),
-            "H_bar" => floats(|s| s.h_bar).into_any(),
-            "kinetic_energy" => floats(|s| s.kinetic_energy).into_any(),
-            "contacts" => counts(|s| s.contacts as i64).into_any(),
-            "active_contacts" => counts(|s| s.active_contacts as i64).into_any(),
-            "max_penetration_over_h" => floats(|s| s.max_penetration_over_h).into_any(),
-            "epsilon" => floats(|s| s.epsilon).into_any(),
-            "phi" => floats(|s| s.phi).into_any(),
-            "newton_iterations" => counts(|s| i64::from(s.newton_iterations)).into_any(),
-            "dt" => floats(|s| s.dt).into_any(),
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "series column {other} has no reader in the binding"
-                )));
+            Column::Real(value) => PyArray1::from_vec(py, series.iter().map(value).collect()).into_any(),
+            Column::Count(value) => {
+                PyArray1::from_vec(py, series.iter().map(|s| value(s) as i64).collect()).into_any()
             }
         };
-        out.set_item(column, array)?;
+        out.set_item(name, array)?;
     }
     Ok(out)
 }

@@ -397,6 +397,12 @@ impl Core {
     /// The frames (centreline snapshots) as stored JSON; 404 before the result.
     pub async fn frames(&self, id: i64) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
+        self.frames_of(&c).await
+    }
+
+    /// The stored frames JSON of case `c`; 404 before its result.
+    async fn frames_of(&self, c: &CaseRecord) -> Result<String, CoreError> {
+        let id = c.id;
         self.store
             .case_frames_json(id)
             .await?
@@ -407,7 +413,7 @@ impl Core {
     /// `case-{id}/*.vtp`) in a zip archive; 404 before the result.
     pub async fn frames_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
         let c = self.case_record(id).await?;
-        let frames: Vec<Frame> = serde_json::from_str(&self.frames(id).await?)
+        let frames: Vec<Frame> = serde_json::from_str(&self.frames_of(&c).await?)
             .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
         let files = report::vtk::case_files(&format!("case-{id}"), c.params.h, &frames);
         zip_archive(&files).map_err(|e| CoreError::Figure(e.to_string()))

@@ -26,6 +26,7 @@
 //!   in [0, pi/2]). The paper fixes epsilon = 0.7 and phi = pi/3 "at inversion".
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
+use std::fmt::Write;
 
 /// One sample of the tightening series.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -59,32 +60,57 @@ pub struct Sample {
     pub dt: f64,
 }
 
-/// Header of the series CSV, one column per `Sample` field.
-pub const CSV_HEADER: &str = "time,l_k_bar,l_c_over_L,F,F_bar,W,H,H_bar,kinetic_energy,contacts,active_contacts,max_penetration_over_h,epsilon,phi,newton_iterations,dt";
+/// A series column's values: real, or a count (written as an integer).
+#[derive(Clone, Copy)]
+pub enum Column {
+    Real(fn(&Sample) -> f64),
+    Count(fn(&Sample) -> u64),
+}
 
-/// The series as CSV text (header, then one row per sample).
+/// The series' columns in order, by the names of the CSV header (and of
+/// the Python binding's arrays): one per `Sample` field.
+pub const COLUMNS: [(&str, Column); 16] = [
+    ("time", Column::Real(|s| s.time)),
+    ("l_k_bar", Column::Real(|s| s.l_k_bar)),
+    ("l_c_over_L", Column::Real(|s| s.l_c_over_l)),
+    ("F", Column::Real(|s| s.force)),
+    ("F_bar", Column::Real(|s| s.f_bar)),
+    ("W", Column::Real(|s| s.width)),
+    ("H", Column::Real(|s| s.height)),
+    ("H_bar", Column::Real(|s| s.h_bar)),
+    ("kinetic_energy", Column::Real(|s| s.kinetic_energy)),
+    ("contacts", Column::Count(|s| s.contacts as u64)),
+    ("active_contacts", Column::Count(|s| s.active_contacts as u64)),
+    (
+        "max_penetration_over_h",
+        Column::Real(|s| s.max_penetration_over_h),
+    ),
+    ("epsilon", Column::Real(|s| s.epsilon)),
+    ("phi", Column::Real(|s| s.phi)),
+    (
+        "newton_iterations",
+        Column::Count(|s| u64::from(s.newton_iterations)),
+    ),
+    ("dt", Column::Real(|s| s.dt)),
+];
+
+/// The series as CSV: a header of [`COLUMNS`]' names, one row per sample.
 pub fn series_csv(series: &[Sample]) -> String {
-    let mut out = format!("{CSV_HEADER}\n");
+    let names: Vec<&str> = COLUMNS.iter().map(|(name, _)| *name).collect();
+    let mut out = names.join(",");
+    out.push('\n');
     for s in series {
-        out.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            s.time,
-            s.l_k_bar,
-            s.l_c_over_l,
-            s.force,
-            s.f_bar,
-            s.width,
-            s.height,
-            s.h_bar,
-            s.kinetic_energy,
-            s.contacts,
-            s.active_contacts,
-            s.max_penetration_over_h,
-            s.epsilon,
-            s.phi,
-            s.newton_iterations,
-            s.dt
-        ));
+        for (i, (_, column)) in COLUMNS.iter().enumerate() {
+            if i > 0 {
+                out.push(',');
+            }
+            match column {
+                Column::Real(value) => write!(out, "{}", value(s)),
+                Column::Count(value) => write!(out, "{}", value(s)),
+            }
+            .expect("writing to a String");
+        }
+        out.push('\n');
     }
     out
 }
@@ -375,8 +401,13 @@ mod tests {
         let csv = series_csv(&[Sample::default(), Sample::default()]);
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines.len(), 3);
-        let columns = CSV_HEADER.split(',').count();
-        assert!(lines.iter().all(|l| l.split(',').count() == columns));
+        assert!(lines.iter().all(|l| l.split(',').count() == COLUMNS.len()));
+        let fields = serde_json::to_value(Sample::default()).unwrap();
+        assert_eq!(
+            COLUMNS.len(),
+            fields.as_object().unwrap().len(),
+            "a column per field"
+        );
     }
 
     /// The penetration column has one name, with its unit, in JSON and CSV.
@@ -384,7 +415,7 @@ mod tests {
     fn penetration_has_one_name_in_json_and_csv() {
         let json = serde_json::to_value(Sample::default()).unwrap();
         assert!(json.get("max_penetration_over_h").is_some());
-        assert!(CSV_HEADER.split(',').any(|c| c == "max_penetration_over_h"));
+        assert!(COLUMNS.iter().any(|(c, _)| *c == "max_penetration_over_h"));
     }
 
     #[test]

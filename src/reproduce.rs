@@ -25,8 +25,17 @@ pub struct Args {
     threads: Option<usize>,
 }
 
+/// The validation's base case: the defaults under the paper's pull
+/// (`Protocol::Reference`; the default protocol is the adaptive one).
+fn base() -> CaseParams {
+    CaseParams {
+        protocol: Protocol::Reference,
+        ..CaseParams::default()
+    }
+}
+
 fn job(key: &str, f: impl FnOnce(&mut CaseParams)) -> Job {
-    let mut params = CaseParams::default();
+    let mut params = base();
     f(&mut params);
     Job {
         key: key.to_string(),
@@ -38,10 +47,7 @@ fn job(key: &str, f: impl FnOnce(&mut CaseParams)) -> Job {
 /// The built knot for `n` with every node but the two clamped at each end moved
 /// by a random vector of length at most `PERTURBATION` h (seeded, uniform in the ball).
 fn perturbed(key: &'static str, n: u32, seed: u64) -> Result<Job> {
-    let mut params = CaseParams {
-        n,
-        ..CaseParams::default()
-    };
+    let mut params = CaseParams { n, ..base() };
     let shape = solver::knot::build(&params.knot_spec())?;
     let mut rng = solver::validation::rng::SplitMix64::new(seed);
     let r = PERTURBATION * params.h;
@@ -162,7 +168,7 @@ fn preset_jobs(name: &str) -> Result<Vec<Job>> {
             fields.insert(axis.clone(), value.clone());
             fields.insert("protocol".into(), serde_json::to_value(Protocol::Reference)?);
             let params: CaseParams = serde_json::from_value(serde_json::Value::Object(fields))?;
-            let key = if params == CaseParams::default() {
+            let key = if params == base() {
                 "n3".to_string()
             } else {
                 format!("{name}_{axis}{value}")

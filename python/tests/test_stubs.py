@@ -16,5 +16,5 @@ def test_stubs_match_the_parameter_table():
     )
     compile(text, str(STUBS), "exec")
     for name in ("n: int = 3,", "h: float = 1.6e-3,", "dt: float | None = None,",
-                 'protocol: Literal["reference", "adaptive"] = "reference",'):
+                 'protocol: Literal["reference", "adaptive"] = "adaptive",'):
         assert name in text

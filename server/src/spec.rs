@@ -105,11 +105,11 @@ fn numbers(values: &[f64]) -> Vec<Value> {
     values.iter().map(|v| Value::from(*v)).collect()
 }
 
-/// The presets: the paper's Figs 7, 9 and 11. They measure inversion points,
-/// so they pull with the adaptive protocol: within 0.6 % of the reference
-/// pull at every one of their cases at about a tenth of its cost
-/// (BENCHMARKS.md, "Physics revision 6"); a case's F bar series away from
-/// the snap is then the fast approach's (5-20 % high).
+/// The presets: the paper's Figs 7, 9 and 11, under the default (adaptive)
+/// pull: within 0.6 % of the reference pull at every one of their cases at
+/// about a tenth of its cost (BENCHMARKS.md, "Physics revision 7"); a case's
+/// F bar series away from the snap is then the fast approach's (about 5 %
+/// high).
 pub fn presets() -> Vec<Preset> {
     let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
         let base = base.as_object().cloned().unwrap_or_default();
@@ -129,21 +129,21 @@ pub fn presets() -> Vec<Preset> {
         make(
             "fig7",
             "Paper Fig. 7: inversion point vs rod radius h (n = 3, mu = 0.1, h = 1.6 ... 3.2 mm)",
-            serde_json::json!({"n": 3, "mu": 0.1, "protocol": "adaptive"}),
+            serde_json::json!({"n": 3, "mu": 0.1}),
             "h",
             numbers(&[1.6e-3, 2.0e-3, 2.4e-3, 2.8e-3, 3.2e-3]),
         ),
         make(
             "fig9",
             "Paper Fig. 9: inversion point vs number of passes n (h = 1.6 mm, mu = 0.1, n = 1 ... 5)",
-            serde_json::json!({"h": 1.6e-3, "mu": 0.1, "protocol": "adaptive"}),
+            serde_json::json!({"h": 1.6e-3, "mu": 0.1}),
             "n",
             (1..=5).map(Value::from).collect(),
         ),
         make(
             "fig11",
             "Paper Fig. 11: inversion point vs friction mu (n = 3, h = 3.4 mm, mu = 0.1 ... 0.7)",
-            serde_json::json!({"n": 3, "h": 3.4e-3, "protocol": "adaptive"}),
+            serde_json::json!({"n": 3, "h": 3.4e-3}),
             "mu",
             numbers(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
         ),

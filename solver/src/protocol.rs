@@ -4,7 +4,7 @@
 //! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
 use crate::case::{CaseParams, ParamError, Protocol, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
-use crate::external::Environment;
+use crate::external::{Environment, sliding};
 use crate::knot;
 use crate::material::Material;
 use crate::measurements::{self, Inversion, InversionCriteria, Sample};
@@ -81,9 +81,12 @@ const FAST_DT_FACTOR: f64 = 4.0;
 /// [`Protocol::Adaptive`]: checkpoint spacing in l_k bar while fast.
 const CHECKPOINT_SPACING: f64 = 2.0;
 /// [`Protocol::Adaptive`]: how far (l_k bar) before the fast pull's snap the
-/// slow pull restarts (the damped fast pull snaps late), and how much further
-/// back each retry goes.
-const RESTART_BEFORE: f64 = 10.0;
+/// slow pull restarts (the fast pull snaps late: n = 3 by 3, n = 5 by 5), and
+/// how much further back each retry goes. The slow pull needs a few l_k bar to
+/// take over from the settled state: restarting 6 before moved n = 3's
+/// inversion by -0.65 % and n = 5's by -0.91 %, 8 before n = 3's by -0.17 %
+/// (BENCHMARKS.md, "Physics revision 7").
+const RESTART_BEFORE: f64 = 8.0;
 /// [`Protocol::Adaptive`]: a slow pull that snaps within this much l_k bar of
 /// its restart started past the fold, and is retried from further back.
 const MIN_LEAD: f64 = 2.0;
@@ -238,9 +241,10 @@ const RELAX_DAMPING: f64 = 20.0;
 /// [`Status::Invalid`] and the reasons. `observer` sees progress after every
 /// sample and returns `false` to cancel.
 ///
-/// A short rod with one pass, pulled quickly until l_k bar falls below 130:
+/// A short rod with one pass, pulled quickly at a constant speed (the
+/// reference protocol: no stage goes back) until l_k bar falls below 130:
 /// ```
-/// use solver::case::CaseParams;
+/// use solver::case::{CaseParams, Protocol};
 /// use solver::protocol::{self, Status};
 ///
 /// let params = CaseParams {
@@ -250,6 +254,7 @@ const RELAX_DAMPING: f64 = 20.0;
 ///     relax_time: 0.1,
 ///     pull_speed: 0.01,
 ///     min_l_k_bar: 130.0,
+///     protocol: Protocol::Reference,
 ///     ..CaseParams::default()
 /// };
 /// let mut samples = 0;
@@ -477,12 +482,22 @@ impl Stage {
     }
 
     /// The damping rate (1/s) given the case's: the fast stages damp like
-    /// the relaxation, so that the knot follows the clamps without swinging.
+    /// the relaxation, so that the knot follows the clamps without swinging
+    /// (sparing the sliding along the rod, [`Stage::spares_sliding`]).
     fn damping(self, case: f64) -> f64 {
         match self {
             Stage::Reference | Stage::Snap => case,
             Stage::Settle | Stage::Approach | Stage::After => case.max(RELAX_DAMPING),
         }
+    }
+
+    /// Whether the damping spares sliding along the centre line
+    /// ([`sliding::exempt_sliding`]): in the fast pulls, where a drag on the
+    /// material drawn through the knot would read as clamp force. The
+    /// settling damps every motion, and the slow stages keep the case's
+    /// mass-proportional damping.
+    fn spares_sliding(self) -> bool {
+        matches!(self, Stage::Approach | Stage::After)
     }
 
     /// The largest time step given the case's.
@@ -744,6 +759,11 @@ impl<'a> Case<'a> {
     /// One world step of the pull, counted; an `Ending` when it diverges or
     /// penetrates. Returns the step's report and size.
     fn step(&mut self, pull: &mut Pull) -> Result<(WorldStepReport, f64), Ending> {
+        if pull.stage.spares_sliding() {
+            let gamma = self.world.env.damping;
+            self.world
+                .set_load(0, |rod, load| sliding::exempt_sliding(rod, gamma, load));
+        }
         let (step, dt) = match self.clock.advance(&mut self.world) {
             Ok(s) => (s.report, s.dt),
             Err(e) => return Err(Ending::new(Status::Diverged, e.to_string())),
@@ -850,6 +870,9 @@ impl<'a> Case<'a> {
         pull.stage_start = l_k_bar;
         self.world.contact.solver.tolerance = stage.contact_tolerance(self.params.contact_tolerance);
         self.world.env.damping = stage.damping(self.params.damping);
+        if !stage.spares_sliding() {
+            self.world.set_load(0, |_, load| load.fill(0.0));
+        }
         if self.params.adaptive_dt {
             self.clock.rescale(stage.dt_max(self.params.time_step()));
         }

@@ -3,28 +3,39 @@
 use solver::case::{CaseParams, Protocol};
 use solver::protocol::{self, Stage, Status};
 
-/// On the coarsest n = 3 mesh (K = 158, mu = 0.1), the adaptive pull's
-/// inversion is within 1 % of the reference pull's, and it takes under a
-/// third of its steps (BENCHMARKS.md compares the presets' cases at K = 301).
-/// At mu = 0.1 the reference itself is fixed to 0.5 % (l_k bar 147.1 at
-/// 3 mm/s, 146.5 at 6 mm/s); at mu = 0.2 it is not (134.0 and 131.8), so no
-/// other protocol can be held to 1 % of it there.
+/// On the default n = 3 case (K = 301, mu = 0.1), the adaptive pull's
+/// inversion is within 1 % of the reference pull's, it takes under a third
+/// of its steps (BENCHMARKS.md compares every preset case), and its F bar
+/// over l_k bar 200 ... 300 is within 8 % of the reference's: the fast
+/// approach reads about 5 % high from its speed alone (revision 6, whose
+/// damping dragged the sliding rod, read 11-17 % high). The default mesh,
+/// not a coarser one: on the coarsest (K = 158) the inversion moves by more
+/// than 1 % with where the slow pull restarts (BENCHMARKS.md, "Physics
+/// revision 7"), so a 1 % comparison there measures the restart, not the
+/// protocol.
 #[test]
 fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
     let run = |protocol| {
         let params = CaseParams {
-            nodes: 158,
-            mu: 0.1,
             protocol,
             ..CaseParams::default()
         };
         let report = protocol::run(&params, &mut |_| true);
         assert_eq!(report.status, Status::Completed, "{}", report.reason);
         let inversion = report.inversion.expect("an inversion").l_k_bar;
-        (inversion, report.stats.steps + report.stats.relax_steps)
+        let far: Vec<f64> = (report.series.iter())
+            .filter(|s| (200.0..=300.0).contains(&s.l_k_bar))
+            .map(|s| s.f_bar)
+            .collect();
+        let f_bar = far.iter().sum::<f64>() / far.len() as f64;
+        (inversion, report.stats.steps + report.stats.relax_steps, f_bar)
     };
-    let (reference, reference_steps) = run(Protocol::Reference);
-    let (adaptive, adaptive_steps) = run(Protocol::Adaptive);
+    let (reference, reference_steps, reference_f) = run(Protocol::Reference);
+    let (adaptive, adaptive_steps, adaptive_f) = run(Protocol::Adaptive);
+    assert!(
+        (adaptive_f - reference_f).abs() <= 0.08 * reference_f,
+        "F bar over l_k bar 200 ... 300: adaptive {adaptive_f} against reference {reference_f}"
+    );
     assert!(
         (adaptive - reference).abs() <= 0.01 * reference,
         "adaptive {adaptive} against reference {reference}"

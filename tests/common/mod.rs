@@ -10,9 +10,11 @@ use std::time::{Duration, Instant};
 
 /// A real case that takes about 0.1 s: a coarse rod (h = 5 mm, K = 121),
 /// a short relaxation and a pull stopped about one l_k bar after the start
-/// (the initial l_k bar is about 139.9).
+/// (the initial l_k bar is about 139.9), under the reference pull (the
+/// clamps at `pull_speed` throughout).
 pub fn tiny_base() -> Value {
     json!({
+        "protocol": "reference",
         "h": 5e-3,
         "nodes": 121,
         "pull_speed": 0.02,
@@ -29,6 +31,7 @@ pub fn tiny_base() -> Value {
 /// quarter second.
 pub fn long_base() -> Value {
     json!({
+        "protocol": "reference",
         "h": 5e-3,
         "nodes": 121,
         "pull_speed": 0.001,

@@ -35,17 +35,21 @@ pub use table::{Bound, Parameter, Range};
 /// goes back to pull slowly through a snap its damped approach smeared out
 /// (`protocol::smeared_snap`); the presets pull adaptively; the reference
 /// pull is unchanged.
-pub const PHYSICS_REVISION: u32 = 6;
+/// Revision 7: the adaptive pull's fast stages spare sliding along the centre
+/// line from their damping (`external::sliding`), it restarts 8 (was 10)
+/// before the fast pull's snap, and it is the default protocol; the reference
+/// pull is unchanged.
+pub const PHYSICS_REVISION: u32 = 7;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Protocol {
     /// The whole pull at `pull_speed` (the paper's protocol).
-    #[default]
     Reference,
     /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
-    /// `pull_speed`, damped as in the relaxation and (with `adaptive_dt`)
+    /// `pull_speed`, damped as in the relaxation but sparing the sliding
+    /// along the rod (`external::sliding`), and (with `adaptive_dt`)
     /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
     /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
     /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
@@ -58,8 +62,9 @@ pub enum Protocol {
     /// approaches fast again; a fast approach that reaches the end of the
     /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
     /// whole pull is the reference's. The report's `stages` list what ran.
-    /// Its inversion lies within 1 % of the reference's, but the fast
-    /// approach reads F bar 5-20 % high (BENCHMARKS.md, "Pull protocols").
+    /// Its inversion lies within 1 % of the reference's; its fast approach
+    /// reads F bar about 5 % high (BENCHMARKS.md, "Physics revision 7").
+    #[default]
     Adaptive,
 }
 

@@ -295,18 +295,19 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "protocol",
         unit: "",
-        default: "\"reference\"",
+        default: "\"adaptive\"",
         range: Range::Words(&["reference", "adaptive"]),
         null: None,
         paper: "\"reference\"",
         doc: "How the clamps move: \"reference\" pulls at pull_speed throughout, as in the paper. \"adaptive\" ramps \
-              up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is far \
-              from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to the \
-              checkpoint 10 before it (further if the knot then snaps within 2; also when H bar falls to 0.4 within \
-              20, a snap the damped approach smeared out), lets the knot settle and pulls through the snap at \
-              pull_speed; above mu = 0.7 (not measured) it pulls as \"reference\" does. Its inversion lies within \
-              0.6 % of the reference's at every preset case at a tenth of the cost, but its fast approach reads F \
-              bar 5-20 % high (BENCHMARKS.md, \"Physics revision 6\"): the presets' protocol, not the curves'.",
+              up to 16 times pull_speed while the knot is far from its snap (damped, sparing the sliding along the \
+              rod; with adaptive_dt, steps up to 4 times dt), keeping a checkpoint every 2 in l_k bar; once a snap is \
+              detected it goes back to the checkpoint 8 before it (further if the knot then snaps within 2; also when \
+              H bar falls to 0.4 within 20, a snap the approach smeared out), lets the knot settle and pulls through \
+              the snap at pull_speed; above mu = 0.7 (not measured) it pulls as \"reference\" does. Its inversion \
+              lies within 0.6 % of the reference's at every preset case at about a tenth of the cost; its fast \
+              approach reads F bar about 5 % above the reference's (BENCHMARKS.md, \"Physics revision 7\"): \
+              choose \"reference\" for force curves.",
         value: UNCHECKED,
     },
     Parameter {

@@ -1,6 +1,8 @@
 //! External forces of eq. (7c) that do not come from contact: gravity F^G and an
-//! optional viscous damping (applied by the stepper).
+//! optional viscous damping (applied by the stepper), and the load that spares
+//! sliding along the centre line from it (`sliding`).
 pub mod gravity;
+pub mod sliding;
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};

@@ -321,6 +321,12 @@ impl World {
         &mut self.bodies[i].load
     }
 
+    /// Sets rod `i`'s external load from the rod's state: `f` gets the rod
+    /// and the load (one entry per DOF) to overwrite.
+    pub fn set_load(&mut self, i: usize, f: impl FnOnce(&Rod, &mut [f64])) {
+        f(&self.rods[i], &mut self.bodies[i].load);
+    }
+
     /// The contacts found at the start of the last step.
     pub fn contacts(&self) -> &[ContactPoint] {
         &self.contacts

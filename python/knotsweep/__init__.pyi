@@ -124,7 +124,7 @@ def run(
     poisson_ratio: float = 0.5,
     density: float = 1000.0,
     pull_speed: float = 3e-3,
-    protocol: Literal["reference", "adaptive"] = "reference",
+    protocol: Literal["reference", "adaptive"] = "adaptive",
     dt: float | None = None,
     adaptive_dt: bool = True,
     contact_tolerance: float = 1e-6,
@@ -193,14 +193,15 @@ def run(
     pull_speed (m/s): Pulling speed of each clamp. Range: [1e-5, 1] m/s. Default: 3e-3. Paper: 1 mm/s (the
         text), 3 mm/s (the code).
     protocol: How the clamps move: "reference" pulls at pull_speed throughout, as in the paper. "adaptive"
-        ramps up to 16 times pull_speed (damped; with adaptive_dt, steps up to 4 times dt) while the knot is
-        far from its snap, keeping a checkpoint every 2 in l_k bar; once a snap is detected it goes back to
-        the checkpoint 10 before it (further if the knot then snaps within 2; also when H bar falls to 0.4
-        within 20, a snap the damped approach smeared out), lets the knot settle and pulls through the snap at
-        pull_speed; above mu = 0.7 (not measured) it pulls as "reference" does. Its inversion lies within 0.6
-        % of the reference's at every preset case at a tenth of the cost, but its fast approach reads F bar
-        5-20 % high (BENCHMARKS.md, "Physics revision 6"): the presets' protocol, not the curves'. Range:
-        "reference" or "adaptive". Default: "reference". Paper: "reference".
+        ramps up to 16 times pull_speed while the knot is far from its snap (damped, sparing the sliding along
+        the rod; with adaptive_dt, steps up to 4 times dt), keeping a checkpoint every 2 in l_k bar; once a
+        snap is detected it goes back to the checkpoint 8 before it (further if the knot then snaps within 2;
+        also when H bar falls to 0.4 within 20, a snap the approach smeared out), lets the knot settle and
+        pulls through the snap at pull_speed; above mu = 0.7 (not measured) it pulls as "reference" does. Its
+        inversion lies within 0.6 % of the reference's at every preset case at about a tenth of the cost; its
+        fast approach reads F bar about 5 % above the reference's (BENCHMARKS.md, "Physics revision 7"):
+        choose "reference" for force curves. Range: "reference" or "adaptive". Default: "adaptive". Paper:
+        "reference".
     dt (s): Time step; with adaptive_dt the largest step. Range: null or [1e-6, 1e-2] s. null: 0.5 ms (half
         the paper's code's 1 ms, converged within 0.4 %) at L = 1 m, K = 301, scaled with the square of the
         edge length L/(K-1), at most 1e-2 s. Default: null. Paper: 1 ms (the code).
@@ -247,7 +248,7 @@ def validate(
     poisson_ratio: float = 0.5,
     density: float = 1000.0,
     pull_speed: float = 3e-3,
-    protocol: Literal["reference", "adaptive"] = "reference",
+    protocol: Literal["reference", "adaptive"] = "adaptive",
     dt: float | None = None,
     adaptive_dt: bool = True,
     contact_tolerance: float = 1e-6,

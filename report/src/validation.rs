@@ -277,7 +277,7 @@ pub fn markdown(
         };
         rows.push((
             format!(
-                "convergence: {what} (step {} ms{}, {} mm/s), inversion within 3 % of the default",
+                "convergence: {what} (step {} ms{}, {} mm/s), inversion within 3 % of the reference pull's n = 3",
                 format!("{:.4}", j.params.time_step() * 1e3)
                     .trim_end_matches('0')
                     .trim_end_matches('.'),
@@ -298,7 +298,7 @@ pub fn markdown(
     let d = CaseParams::default();
     writeln!(
         doc,
-        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, friction at the {}, start twist {} (`start_twist`), pull protocol `{}` (`solver::case::Protocol`).\n",
+        "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, friction at the {}, start twist {} (`start_twist`), pull protocol `{}` (`solver::case::Protocol`; the checks below pull with `reference`, the paper's protocol, as their commands say).\n",
         d.length,
         d.nodes,
         d.youngs_modulus,

@@ -201,7 +201,9 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
     let mut fields = serde_json::Map::new();
     for (k, v) in base.as_object().unwrap() {
-        fields.insert(format!("p-{k}"), json!(v.to_string()));
+        // A word (e.g. the protocol) goes in bare, a number as its JSON text.
+        let text = v.as_str().map_or_else(|| v.to_string(), str::to_string);
+        fields.insert(format!("p-{k}"), json!(text));
     }
     fields.insert("g-mu".into(), json!("0.05, 0.1"));
     browser.js(FILL, json!([fields])).await;
@@ -241,6 +243,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     let (_, sweep) = get_sweep(&c, &url, id).await;
     assert_eq!(sweep["total"], 4, "2 points and 2 twins");
     assert_eq!(sweep["spec"]["base"]["h"], json!(5e-3), "{sweep:#}");
+    assert_eq!(sweep["spec"]["base"]["protocol"], json!("reference"), "{sweep:#}");
     assert_eq!(sweep["spec"]["certify"], true, "{sweep:#}");
 
     // Progress moves to the end; the curves and the phase diagram appear.

@@ -535,12 +535,18 @@ impl UncertaintyView {
 }
 
 /// A sweep with its cases: counts, progress, ETA.
+/// Cases per status word.
+fn status_counts(cases: &[SweepCase]) -> BTreeMap<String, i64> {
+    let mut counts: BTreeMap<String, i64> = BTreeMap::new();
+    for c in cases {
+        *counts.entry(c.case.status().to_string()).or_default() += 1;
+    }
+    counts
+}
+
 impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
     fn from((record, cases): (&SweepRecord, &[SweepCase])) -> Self {
-        let mut counts: BTreeMap<String, i64> = BTreeMap::new();
-        for c in cases {
-            *counts.entry(c.case.status().to_string()).or_default() += 1;
-        }
+        let counts = status_counts(cases);
         let total = cases.len().max(1) as f64;
         let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
         let running_done: f64 = cases
@@ -679,31 +685,32 @@ impl PhaseDiagram {
     /// The phase diagram of a sweep: `base` its full base parameters,
     /// `simplified` the simplified model's snap for each point (grid order).
     pub fn new(record: &SweepRecord, cases: &[SweepCase], base: Value, simplified: Vec<Option<f64>>) -> Self {
-        let d = SweepDetail::from((record, cases));
         let (points, certified) = points(record, cases);
         Self {
             sweep_id: record.id,
             name: record.name.clone(),
             preset: record.preset.clone(),
-            status: d.summary.status,
+            status: SweepSummary::from((record, status_counts(cases))).status,
             complete: cases.iter().all(|c| c.case.state.is_terminal()),
             varied: record.varied.clone(),
             base,
             solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),
             physics_revision: solver::case::PHYSICS_REVISION,
             certified,
-            points: (d.cases.into_iter().zip(&points))
-                .zip(simplified)
-                .map(|((c, point), simplified_l_k_bar)| PhasePoint {
-                    case_id: c.case_id,
-                    params: c.params,
-                    status: c.status,
-                    inversion: c.inversion,
-                    reason: c.reason,
-                    simplified_l_k_bar,
-                    uncertainty: point
-                        .twin
-                        .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
+            points: (points.iter().zip(simplified))
+                .map(|(point, simplified_l_k_bar)| {
+                    let c = SweepCaseView::from((point.case, &record.varied[..]));
+                    PhasePoint {
+                        case_id: c.case_id,
+                        params: c.params,
+                        status: c.status,
+                        inversion: c.inversion,
+                        reason: c.reason,
+                        simplified_l_k_bar,
+                        uncertainty: point
+                            .twin
+                            .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
+                    }
                 })
                 .collect(),
         }

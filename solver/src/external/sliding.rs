@@ -1,5 +1,5 @@
 //! Damping that spares sliding along the centre line: the fast stages of the
-//! adaptive pull ([`crate::protocol`]) damp the swinging of the loop and the
+//! adaptive pull (the protocol module) damp the swinging of the loop and the
 //! tails, not the flow of material through the knot.
 //!
 //! The stepper's damping is mass-proportional, F = -gamma M v. Pulling a knot

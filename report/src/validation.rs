@@ -4,7 +4,8 @@
 //! charts (paper Fig. 8 a, b).
 use crate::charts::{CaseCurve, Quantity, tightening_chart};
 use anyhow::{Context, Result};
-use solver::case::CaseParams;
+use serde_json::Value;
+use solver::case::{CaseParams, PARAMETERS};
 use solver::protocol::{CaseReport, Status};
 use std::fmt::Write;
 
@@ -27,66 +28,41 @@ fn command_of(j: &Job) -> String {
     }
 }
 
-/// The `knotsweep run` flags that differ from the defaults.
+/// `knotsweep run` with a flag for each parameter of the table
+/// (`solver::case::PARAMETERS`, in its order) whose value differs from the
+/// default.
 fn command(p: &CaseParams) -> String {
-    let d = CaseParams::default();
-    let [x, y, z] = p.gravity;
-    let flags = [
-        ("n", p.n != d.n, p.n.to_string()),
-        ("h", p.h != d.h, format!("{:e}", p.h)),
-        ("mu", p.mu != d.mu, p.mu.to_string()),
-        ("nodes", p.nodes != d.nodes, p.nodes.to_string()),
-        (
-            "dt",
-            p.dt.is_some(),
-            p.dt.map(|dt| format!("{dt:e}")).unwrap_or_default(),
-        ),
-        (
-            "adaptive-dt",
-            p.adaptive_dt != d.adaptive_dt,
-            p.adaptive_dt.to_string(),
-        ),
-        (
-            "pull-speed",
-            p.pull_speed != d.pull_speed,
-            format!("{:e}", p.pull_speed),
-        ),
-        (
-            "contact-tolerance",
-            p.contact_tolerance != d.contact_tolerance,
-            format!("{:e}", p.contact_tolerance),
-        ),
-        (
-            "friction-law",
-            p.friction_law != d.friction_law,
-            p.friction_law.to_string(),
-        ),
-        ("rolling", p.rolling != d.rolling, p.rolling.to_string()),
-        (
-            "start-twist",
-            p.start_twist != d.start_twist,
-            p.start_twist.map(|t| t.to_string()).unwrap_or_default(),
-        ),
-        (
-            "contact-candidates",
-            p.contact_candidates != d.contact_candidates,
-            p.contact_candidates.to_string(),
-        ),
-        (
-            "contact-solve",
-            p.contact_solve != d.contact_solve,
-            p.contact_solve.to_string(),
-        ),
-        ("protocol", p.protocol != d.protocol, p.protocol.to_string()),
-        ("gravity", p.gravity != d.gravity, format!("{x},{y},{z}")),
-    ];
+    let (mine, default) = (json(p), json(&CaseParams::default()));
     let mut s = String::from("knotsweep run");
-    for (name, differs, value) in flags {
-        if differs {
-            write!(s, " --{name} {value}").ok();
+    for parameter in PARAMETERS {
+        let value = &mine[parameter.name];
+        if value != &default[parameter.name] && !value.is_null() {
+            write!(s, " --{} {}", parameter.name.replace('_', "-"), flag_text(value)).ok();
         }
     }
     s
+}
+
+fn json(p: &CaseParams) -> Value {
+    serde_json::to_value(p).expect("case parameters serialise")
+}
+
+/// A value as the command line takes it: a word bare, a small or large
+/// number in e-notation (1.6e-3), a list comma-separated.
+fn flag_text(value: &Value) -> String {
+    match value {
+        Value::String(word) => word.clone(),
+        Value::Number(n) if n.is_f64() => {
+            let x = n.as_f64().unwrap_or_default();
+            if x == 0.0 || (1e-2..1e4).contains(&x.abs()) {
+                x.to_string()
+            } else {
+                format!("{x:e}")
+            }
+        }
+        Value::Array(items) => items.iter().map(flag_text).collect::<Vec<_>>().join(","),
+        other => other.to_string(),
+    }
 }
 
 /// A job and its report by key.
@@ -498,4 +474,39 @@ pub fn n_sweep_figures(get: &Lookup) -> Result<Vec<(&'static str, String)>> {
         figures.push((file, svg));
     }
     Ok(figures)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::command;
+    use solver::case::{CaseParams, Protocol};
+
+    #[test]
+    fn the_command_names_every_changed_parameter_in_the_tables_order() {
+        assert_eq!(command(&CaseParams::default()), "knotsweep run");
+        let p = CaseParams {
+            n: 4,
+            h: 3.4e-3,
+            mu: 0.7,
+            dt: Some(2.5e-4),
+            adaptive_dt: false,
+            protocol: Protocol::Reference,
+            gravity: [0.0, 0.0, -9.81],
+            ..CaseParams::default()
+        };
+        let flags = [
+            "--n 4",
+            "--h 3.4e-3",
+            "--mu 0.7",
+            "--protocol reference",
+            "--dt 2.5e-4",
+            "--adaptive-dt false",
+            "--gravity 0,0,-9.81",
+        ];
+        let got = command(&p);
+        for flag in flags {
+            assert!(got.contains(&format!(" {flag}")), "{flag} in {got}");
+        }
+        assert_eq!(got.matches(" --").count(), flags.len(), "{got}");
+    }
 }

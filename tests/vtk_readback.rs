@@ -114,6 +114,10 @@ async fn frames_zip_reads_back() {
         .unwrap();
     assert_eq!(r.status(), StatusCode::OK);
     assert_eq!(r.headers()["content-type"], "application/zip");
+    assert_eq!(
+        r.headers()["content-disposition"],
+        format!("attachment; filename=\"case-{case}-frames.zip\"").as_str()
+    );
     let zip = dir.path().join("frames.zip");
     std::fs::write(&zip, r.bytes().await.unwrap()).unwrap();
     check(&dir.path().join(format!("case-{case}.pvd")), 121, Some(&zip));

@@ -426,15 +426,24 @@ async fn get_case(State(app): State<App>, Id(id): Id) -> Result<Json<CaseDetail>
         (status = 404, body = ErrorBody)))]
 async fn case_series_csv(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
     let csv = app.core.series_csv(id).await?;
-    let disposition = format!("attachment; filename=\"case-{id}-series.csv\"");
-    Ok((
+    Ok(attachment(
+        "text/csv; charset=utf-8",
+        &format!("case-{id}-series.csv"),
+        csv,
+    ))
+}
+
+/// A download: `body` as `content_type`, saved as `filename`.
+fn attachment(content_type: &'static str, filename: &str, body: impl IntoResponse) -> Response {
+    let disposition = format!("attachment; filename=\"{filename}\"");
+    (
         [
-            (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),
+            (header::CONTENT_TYPE, content_type.to_string()),
             (header::CONTENT_DISPOSITION, disposition),
         ],
-        csv,
+        body,
     )
-        .into_response())
+        .into_response()
 }
 
 /// `{id}` and a figure name `f_bar.svg` or `h_bar.svg` from the path.
@@ -507,13 +516,9 @@ async fn case_frames(State(app): State<App>, Id(id): Id) -> Result<Response, Api
         (status = 404, body = ErrorBody)))]
 async fn case_frames_zip(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
     let zip = app.core.frames_zip(id).await?;
-    let disposition = format!("attachment; filename=\"case-{id}-frames.zip\"");
-    Ok((
-        [
-            (header::CONTENT_TYPE, "application/zip".to_string()),
-            (header::CONTENT_DISPOSITION, disposition),
-        ],
+    Ok(attachment(
+        "application/zip",
+        &format!("case-{id}-frames.zip"),
         zip,
-    )
-        .into_response())
+    ))
 }

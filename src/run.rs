@@ -68,14 +68,16 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
             );
     }
     let kind = default.clone();
+    let integer = matches!(p.range, Range::Integers(..));
     arg.help(p.description())
         .allow_negative_numbers(true)
-        .value_parser(move |text: &str| parse(&kind, text))
+        .value_parser(move |text: &str| parse(&kind, integer, text))
 }
 
 /// A flag's text as a JSON value of the type of the parameter's default
-/// (numbers where the default is null; `x,y,z` for vectors).
-fn parse(default: &Value, text: &str) -> Result<Value, String> {
+/// (integers where the range is, numbers where the default is null; `x,y,z`
+/// for vectors).
+fn parse(default: &Value, integer: bool, text: &str) -> Result<Value, String> {
     let number = |v: &str| {
         v.trim()
             .parse::<f64>()
@@ -84,7 +86,7 @@ fn parse(default: &Value, text: &str) -> Result<Value, String> {
     };
     match default {
         Value::Bool(_) => text.parse::<bool>().map(Value::Bool).map_err(|e| e.to_string()),
-        Value::Number(n) if n.is_u64() => text.parse::<u64>().map(Value::from).map_err(|e| e.to_string()),
+        _ if integer => text.parse::<u64>().map(Value::from).map_err(|e| e.to_string()),
         Value::String(_) => Ok(Value::String(text.to_string())),
         Value::Array(_) => text
             .split(',')
@@ -301,6 +303,33 @@ fn summarise(report: &CaseReport) {
             }
         }
         None => println!("no inversion"),
+    }
+    if let Some(q) = &report.quasi_static {
+        if q.holds {
+            println!(
+                "quasi-static: kinetic/elastic energy {:.1e} (median while pulled at pull_speed; limit {:.0e})",
+                q.kinetic_ratio, q.limit
+            );
+        } else {
+            println!(
+                "NOT QUASI-STATIC: kinetic/elastic energy {:.1e} above {:.0e} while pulled at pull_speed: the pull is too \
+                 fast for this rod; a slower pull_speed gives the quasi-static inversion",
+                q.kinetic_ratio, q.limit
+            );
+        }
+    }
+    if let Some(c) = &report.scaling {
+        println!(
+            "computed with K = {}, time step {:.3e} s, inertia x {:.3e} (mass scaling), time unit {:.3} of the paper's rod's, \
+             pull rate {:.2e} (simulated {:.2e}; the paper's rod: {:.2e})",
+            report.params.node_count(),
+            c.time_step,
+            c.mass_scale,
+            c.time_unit,
+            c.pull_rate,
+            c.simulated_pull_rate,
+            solver::case::reference_pull_rate()
+        );
     }
     let s = &report.stats;
     println!(

@@ -1096,7 +1096,7 @@ async fn a_certified_sweep_runs_a_refined_twin_per_point_and_reports_its_uncerta
         let dt = |case: &Value| case["params"]["dt"].as_f64();
         let point_dt = solver::case::CaseParams {
             h: 5e-3,
-            nodes: 121,
+            nodes: Some(121),
             ..Default::default()
         }
         .time_step();

@@ -276,7 +276,7 @@ pub fn markdown(
         doc,
         "Regenerate with `cargo run --release -- reproduce` (writes this file and the SVG figures in `docs/validation/`; `--raw DIR` keeps every case's JSON report). Defaults: L = {} m, K = {}, E = {:e} Pa, nu = {}, rho = {} kg/m^3, time step {} ms ({}), pull speed {} mm/s per clamp, mu = {}, h = {} mm, contact solve tolerance {:e}, friction at the {}, start twist {} (`start_twist`), pull protocol `{}` (`solver::case::Protocol`; the checks below pull with `reference`, the paper's protocol, as their commands say).\n",
         d.length,
-        d.nodes,
+        d.node_count(),
         d.youngs_modulus,
         d.poisson_ratio,
         d.density,

@@ -58,6 +58,21 @@ pub struct Sample {
     pub newton_iterations: u32,
     /// Time step (s) of the step that produced the sample.
     pub dt: f64,
+    /// The elastic energies of eq. (6) over EI / h (eq. 12's unit): stretching,
+    /// bending and twisting.
+    #[serde(rename = "E_stretch_bar", default)]
+    pub e_stretch_bar: f64,
+    #[serde(rename = "E_bend_bar", default)]
+    pub e_bend_bar: f64,
+    #[serde(rename = "E_twist_bar", default)]
+    pub e_twist_bar: f64,
+}
+
+impl Sample {
+    /// The elastic energy over EI / h.
+    pub fn elastic_bar(&self) -> f64 {
+        self.e_stretch_bar + self.e_bend_bar + self.e_twist_bar
+    }
 }
 
 /// A series column's values: real, or a count (written as an integer).
@@ -69,7 +84,7 @@ pub enum Column {
 
 /// The series' columns in order, by the names of the CSV header (and of
 /// the Python binding's arrays): one per `Sample` field.
-pub const COLUMNS: [(&str, Column); 16] = [
+pub const COLUMNS: [(&str, Column); 19] = [
     ("time", Column::Real(|s| s.time)),
     ("l_k_bar", Column::Real(|s| s.l_k_bar)),
     ("l_c_over_L", Column::Real(|s| s.l_c_over_l)),
@@ -92,6 +107,9 @@ pub const COLUMNS: [(&str, Column); 16] = [
         Column::Count(|s| u64::from(s.newton_iterations)),
     ),
     ("dt", Column::Real(|s| s.dt)),
+    ("E_stretch_bar", Column::Real(|s| s.e_stretch_bar)),
+    ("E_bend_bar", Column::Real(|s| s.e_bend_bar)),
+    ("E_twist_bar", Column::Real(|s| s.e_twist_bar)),
 ];
 
 /// The series as CSV: a header of [`COLUMNS`]' names, one row per sample.

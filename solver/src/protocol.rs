@@ -2,7 +2,7 @@
 //! (equal material frames, no relative rotation), relax with the ends held,
 //! then pull the clamps apart along the line joining them at a steady speed,
 //! sampling the measurements of eq. (11) at a fixed interval of l_k bar.
-use crate::case::{CaseParams, ParamError, Protocol, ValidCase};
+use crate::case::{CaseParams, ParamError, Protocol, Scales, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::external::{Environment, sliding};
 use crate::knot;
@@ -57,10 +57,20 @@ impl Status {
 /// 6"); larger frictions were not measured. (Under revision 4's rolling
 /// strands the fast approaches landed 1.8-17 % off at mu = 0.3-0.7.)
 pub const ADAPTIVE_MAX_MU: f64 = 0.7;
+/// [`Protocol::Adaptive`]: the largest simulated pull rate, over the paper's
+/// rod's, it runs fast at; above it the whole pull is the reference's. Its
+/// fast approach is quasi-static enough at the paper's rate (the inversion
+/// within 0.2 % of the reference's); at 3.3 times that rate (the paper's rod
+/// at 1 cm/s) it lands 0.5 % from the reference pull at that rate, at 10
+/// times 2.1 % (BENCHMARKS.md, "Any rod"). Mass scaling brings every rod
+/// with faster waves to the paper's rate.
+pub const ADAPTIVE_MAX_RATE: f64 = 3.5;
 /// Whether `params` pull fast far from the snap: [`Protocol::Adaptive`] up
-/// to [`ADAPTIVE_MAX_MU`].
+/// to [`ADAPTIVE_MAX_MU`] and [`ADAPTIVE_MAX_RATE`].
 pub fn pulls_fast(params: &CaseParams) -> bool {
-    params.protocol == Protocol::Adaptive && params.mu <= ADAPTIVE_MAX_MU
+    params.protocol == Protocol::Adaptive
+        && params.mu <= ADAPTIVE_MAX_MU
+        && params.scales().pull_rate_ratio <= ADAPTIVE_MAX_RATE
 }
 
 /// A case's cost in node-steps, to the order of magnitude: a pull over the
@@ -71,7 +81,7 @@ pub fn pulls_fast(params: &CaseParams) -> bool {
 pub fn work_estimate(params: &CaseParams) -> f64 {
     let steps = params.length / (params.pull_speed * params.time_step());
     let fast = if pulls_fast(params) { FAST_FACTOR } else { 1.0 };
-    steps * params.nodes as f64 / fast
+    steps * params.node_count() as f64 / fast
 }
 
 /// [`Protocol::Adaptive`]: speed-up far from the snap.
@@ -104,7 +114,7 @@ const FAST_CONTACT_TOLERANCE: f64 = 1e-4;
 /// `RAMP_AFTER`.
 const RAMP: f64 = 4.0;
 const RAMP_AFTER: f64 = 2.0;
-/// [`Protocol::Adaptive`]: longest settling (s) after going back to a checkpoint.
+/// [`Protocol::Adaptive`]: longest settling (s, in the case's time unit) after going back to a checkpoint.
 const SETTLE_TIME: f64 = 0.5;
 /// [`Protocol::Adaptive`]: how far (l_k bar) past the fast pull's snap the
 /// snap stage goes on without one before it takes that snap for the fast
@@ -173,6 +183,94 @@ pub struct CaseReport {
     /// before they were recorded).
     #[serde(default)]
     pub stages: Vec<StageSpan>,
+    /// How the case was computed: time step, inertia and rates (absent from
+    /// reports stored before physics revision 8).
+    #[serde(default)]
+    pub scaling: Option<Scaling>,
+    /// Whether the pull was quasi-static, measured (absent before physics
+    /// revision 8, and where no sample was pulled at `pull_speed`).
+    #[serde(default)]
+    pub quasi_static: Option<QuasiStatic>,
+}
+
+/// How a case was computed ([`CaseParams::scales`], [`CaseParams::time_step`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scaling {
+    /// The largest time step (s).
+    pub time_step: f64,
+    /// The factor on the density in the inertia (1: the physical inertia).
+    pub mass_scale: f64,
+    /// The case's time over the paper's rod's.
+    pub time_unit: f64,
+    /// The pull rate pull_speed / sqrt(E / rho), physical and simulated (the
+    /// paper's rod: 7.1e-5).
+    pub pull_rate: f64,
+    pub simulated_pull_rate: f64,
+}
+
+impl Scaling {
+    fn of(params: &CaseParams) -> Self {
+        let scales = params.scales();
+        Self {
+            time_step: params.time_step(),
+            mass_scale: scales.mass_scale,
+            time_unit: scales.time_unit,
+            pull_rate: params.pull_rate(),
+            simulated_pull_rate: scales.pull_rate_ratio * crate::case::reference_pull_rate(),
+        }
+    }
+}
+
+/// The largest median kinetic-to-elastic energy ratio of a quasi-static
+/// pull. The paper's rod pulled at 3 mm/s (the reference pull) has 6.7e-4
+/// and inverts at 136.4; at 3 cm/s 8.2e-3 and 135.1 (-1 %); at 6 cm/s 3.0e-2
+/// and 130.9 (-4 %) (BENCHMARKS.md, "Any rod").
+pub const QUASI_STATIC_LIMIT: f64 = 1e-2;
+
+/// The measured quasi-staticity of a pull: the kinetic energy (each
+/// sample's largest since the one before) over the elastic energy, median
+/// over the samples pulled at `pull_speed` (stages `reference` and `snap`)
+/// before the inversion. A snap and the stick-slip of friction are dynamic
+/// events of a quasi-static pull: the median sees past them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QuasiStatic {
+    pub kinetic_ratio: f64,
+    /// [`QUASI_STATIC_LIMIT`].
+    pub limit: f64,
+    /// `kinetic_ratio` is at most `limit`.
+    pub holds: bool,
+}
+
+impl QuasiStatic {
+    /// Of a report's series, or `None` without samples pulled at `pull_speed`.
+    fn of(report: &CaseReport) -> Option<Self> {
+        let energy_unit = report.params.bending_stiffness() / report.params.h;
+        let before = report.inversion.map_or(f64::NEG_INFINITY, |i| i.l_k_bar);
+        // A sample belongs to the last stage that reached its l_k bar (a
+        // stage going back drops the samples after its checkpoint).
+        let slow = |l: f64| {
+            let span = report
+                .stages
+                .iter()
+                .rev()
+                .find(|s| s.stage != Stage::Settle && s.to_l_k_bar <= l && l <= s.from_l_k_bar);
+            span.is_some_and(|s| matches!(s.stage, Stage::Reference | Stage::Snap))
+        };
+        let mut ratios: Vec<f64> = (report.series.iter())
+            .filter(|s| s.l_k_bar > before && slow(s.l_k_bar) && s.elastic_bar() > 0.0)
+            .map(|s| s.kinetic_energy / (s.elastic_bar() * energy_unit))
+            .collect();
+        if ratios.is_empty() {
+            return None;
+        }
+        ratios.sort_by(f64::total_cmp);
+        let kinetic_ratio = ratios[ratios.len() / 2];
+        Some(Self {
+            kinetic_ratio,
+            limit: QUASI_STATIC_LIMIT,
+            holds: kinetic_ratio <= QUASI_STATIC_LIMIT,
+        })
+    }
 }
 
 impl CaseReport {
@@ -191,6 +289,8 @@ impl CaseReport {
             frames: Vec::new(),
             stats: Stats::default(),
             stages: Vec::new(),
+            scaling: None,
+            quasi_static: None,
         }
     }
 }
@@ -233,7 +333,7 @@ const FRAME_HISTORY: usize = 40;
 const FRAME_SPACING: f64 = 20.0;
 const SNAP_FRAME_SPACING: f64 = 2.0;
 const SNAP_WINDOW: f64 = 10.0;
-/// Damping rate (1/s) while relaxing.
+/// Damping rate (1/s, over the case's time unit) while relaxing.
 const RELAX_DAMPING: f64 = 20.0;
 
 /// Runs one case: validates `params`, building the start shape once, and
@@ -250,8 +350,8 @@ const RELAX_DAMPING: f64 = 20.0;
 /// let params = CaseParams {
 ///     n: 1,
 ///     length: 0.3,
-///     nodes: 102,
-///     relax_time: 0.1,
+///     nodes: Some(102),
+///     relax_time: Some(0.1),
 ///     pull_speed: 0.01,
 ///     min_l_k_bar: 130.0,
 ///     protocol: Protocol::Reference,
@@ -362,10 +462,11 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
             determinant_text(report.determinant_initial)
         ));
     }
+    let scales = params.scales();
     let material = Material {
         youngs_modulus: params.youngs_modulus,
         poisson_ratio: params.poisson_ratio,
-        density: params.density,
+        density: params.density * scales.mass_scale,
     };
     let mut rod = Rod::new(&shape.points, params.h, material).map_err(|e| format!("rod: {e}"))?;
     report.writhe = knot::writhe(&shape.points);
@@ -393,8 +494,8 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         ..defaults
     };
     let env = Environment {
-        gravity: Vector3::from(params.gravity),
-        damping: RELAX_DAMPING,
+        gravity: Vector3::from(params.gravity) / scales.mass_scale,
+        damping: RELAX_DAMPING / scales.time_unit,
     };
     Ok(World::new(vec![rod], env, contact, newton))
 }
@@ -421,6 +522,10 @@ struct Case<'a> {
     clock: TimeStep,
     /// Knot determinant of an n-pass overhand knot (2n + 1).
     expected: u64,
+    /// The case's inertia and time unit.
+    scales: Scales,
+    /// Scratch for the energies' gradient.
+    gradient: Vec<f64>,
     started: std::time::Instant,
 }
 
@@ -481,13 +586,13 @@ impl Stage {
         }
     }
 
-    /// The damping rate (1/s) given the case's: the fast stages damp like
+    /// The damping rate (1/s) given the case's and the relaxation's: the fast stages damp like
     /// the relaxation, so that the knot follows the clamps without swinging
     /// (sparing the sliding along the rod, [`Stage::spares_sliding`]).
-    fn damping(self, case: f64) -> f64 {
+    fn damping(self, case: f64, relax: f64) -> f64 {
         match self {
             Stage::Reference | Stage::Snap => case,
-            Stage::Settle | Stage::Approach | Stage::After => case.max(RELAX_DAMPING),
+            Stage::Settle | Stage::Approach | Stage::After => case.max(relax),
         }
     }
 
@@ -571,6 +676,7 @@ struct Checkpoint {
 impl<'a> Case<'a> {
     fn new(params: &'a CaseParams, report: CaseReport, world: World, started: std::time::Instant) -> Self {
         let dt = params.time_step();
+        let gradient = vec![0.0; world.rods[0].ndof()];
         let clock = TimeStep::new(if params.adaptive_dt {
             AdaptiveOptions::up_to(dt)
         } else {
@@ -582,6 +688,8 @@ impl<'a> Case<'a> {
             world,
             clock,
             expected: knot::expected_determinant(params.n),
+            scales: params.scales(),
+            gradient,
             started,
         }
     }
@@ -634,12 +742,16 @@ impl<'a> Case<'a> {
         Ok(())
     }
 
-    /// Stage 2: relaxation with the ends held (damped), until the kinetic
+    /// Stage 2: relaxation with the ends held (damped, with the settling's
+    /// longer steps), until the kinetic
     /// energy is a `relax_tolerance` fraction of the elastic energy or
     /// `relax_time` has passed.
     fn relax(&mut self) -> Result<(), Ending> {
         self.begin(Stage::Settle);
-        self.settle(self.params.relax_time)?;
+        if self.params.adaptive_dt {
+            self.clock.rescale(Stage::Settle.dt_max(self.params.time_step()));
+        }
+        self.settle(self.params.relax_limit())?;
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
         let at = self.l_k_bar();
@@ -652,7 +764,6 @@ impl<'a> Case<'a> {
     /// Damped steps with the clamps held until the kinetic energy is a
     /// `relax_tolerance` fraction of the elastic energy, or for `max_time`.
     fn settle(&mut self, max_time: f64) -> Result<(), Ending> {
-        let mut grad = vec![0.0; self.world.rods[0].ndof()];
         let mut settled_for = 0.0;
         while settled_for < max_time {
             let step = self
@@ -666,7 +777,7 @@ impl<'a> Case<'a> {
             let rod = &self.world.rods[0];
             let ke = rod.kinetic_energy();
             let elastic =
-                crate::energies::evaluate(rod, crate::energies::Terms::ALL, &mut grad, None).total();
+                crate::energies::evaluate(rod, crate::energies::Terms::ALL, &mut self.gradient, None).total();
             if ke <= self.params.relax_tolerance * elastic {
                 break;
             }
@@ -869,7 +980,7 @@ impl<'a> Case<'a> {
         pull.stage = stage;
         pull.stage_start = l_k_bar;
         self.world.contact.solver.tolerance = stage.contact_tolerance(self.params.contact_tolerance);
-        self.world.env.damping = stage.damping(self.params.damping);
+        self.world.env.damping = stage.damping(self.params.damping, RELAX_DAMPING / self.scales.time_unit);
         if !stage.spares_sliding() {
             self.world.set_load(0, |_, load| load.fill(0.0));
         }
@@ -918,7 +1029,7 @@ impl<'a> Case<'a> {
         let at = c.l_k_bar;
         self.rewind(c, pull);
         self.enter(pull, Stage::Settle, at);
-        self.settle(SETTLE_TIME)?;
+        self.settle(SETTLE_TIME * self.scales.time_unit)?;
         self.enter(pull, Stage::Snap, at);
         Ok(())
     }
@@ -951,6 +1062,8 @@ impl<'a> Case<'a> {
         };
         (pull.impulse, pull.impulse_time) = (0.0, 0.0);
         let points = rod.positions();
+        let energy_unit = params.bending_stiffness() / params.h;
+        let energies = crate::energies::evaluate(rod, crate::energies::Terms::ALL, &mut self.gradient, None);
         let pairs = self.world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
         let braid = measurements::braid(pairs, pull.mid);
         let geometry = braid.map(|b| {
@@ -982,6 +1095,9 @@ impl<'a> Case<'a> {
             phi,
             newton_iterations: step.newton_iterations,
             dt,
+            e_stretch_bar: energies.stretching / energy_unit,
+            e_bend_bar: energies.bending / energy_unit,
+            e_twist_bar: energies.twisting / energy_unit,
         });
         points
     }
@@ -1088,6 +1204,8 @@ fn finish(
 ) -> CaseReport {
     report.status = status;
     report.reason = reason;
+    report.scaling = Some(Scaling::of(&report.params));
+    report.quasi_static = QuasiStatic::of(&report);
     if status != Status::Completed {
         report.inversion = None;
         let at = l_k_bar(&world, &report.params);

@@ -579,7 +579,7 @@ fn the_coarsest_accepted_mesh_keeps_its_knot_through_the_pull() {
     use solver::case::CaseParams;
     use solver::protocol::{self, Status};
     let coarse = CaseParams {
-        nodes: 158,
+        nodes: Some(158),
         mu: 0.2,
         ..CaseParams::default()
     };
@@ -587,7 +587,12 @@ fn the_coarsest_accepted_mesh_keeps_its_knot_through_the_pull() {
     assert_eq!(report.status, Status::Completed, "{}", report.reason);
     assert_eq!(report.determinant_final, Some(7));
     assert!(report.inversion.is_some());
-    let errors = CaseParams { nodes: 157, ..coarse }.validate().unwrap_err();
+    let errors = CaseParams {
+        nodes: Some(157),
+        ..coarse
+    }
+    .validate()
+    .unwrap_err();
     assert!(
         errors
             .iter()

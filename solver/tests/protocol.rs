@@ -52,7 +52,7 @@ fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
 fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
     let run = |protocol| {
         let params = CaseParams {
-            nodes: 158,
+            nodes: Some(158),
             mu: 0.8,
             min_l_k_bar: 420.0,
             protocol,
@@ -76,7 +76,7 @@ fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
 #[test]
 fn the_stages_count_every_step_once() {
     let params = CaseParams {
-        nodes: 158,
+        nodes: Some(158),
         min_l_k_bar: 300.0,
         ..CaseParams::default()
     };

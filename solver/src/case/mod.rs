@@ -2,15 +2,22 @@
 //! table [`PARAMETERS`] that documents and bounds them), their validation and
 //! the case to run ([`ValidCase`]), shared by the CLI, the API, the queue and
 //! the solver. SI units.
+mod materials;
 mod params;
 mod partial;
+mod scales;
 mod table;
 
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{KnotSpec, StartShape};
 use crate::words::display_as_word;
+pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};
+pub use scales::{
+    EDGE_RADII, REFERENCE_DT, REFERENCE_EDGE, REFERENCE_RADIUS, Scales, default_nodes, pull_rate,
+    reference_pull_rate,
+};
 use serde::{Deserialize, Serialize};
 pub use table::{Bound, Parameter, Range};
 
@@ -75,15 +82,6 @@ pub const MAX_NODES: usize = 4001;
 /// h >= L / this: with edges of at most 4h ([`crate::knot::build`]) and at most
 /// [`MAX_NODES`] nodes, a thinner rod cannot be meshed.
 pub const MIN_RADIUS_DIVISOR: f64 = 16000.0;
-
-/// The default (largest) time step (s) at the paper's edge length
-/// [`REFERENCE_EDGE`]: half the paper's code's 1 ms. With the defaults, n = 3
-/// at 0.25 ms inverts within 0.37 % of 0.5 ms (docs/VALIDATION.md, the
-/// convergence rows); with rods that roll (revision 2), 1 ms was 1.5 % off the
-/// converged inversion (n = 3: 139.8, 137.4, 137.9 at 1, 0.5, 0.25 ms).
-pub const REFERENCE_DT: f64 = 5e-4;
-/// The paper's edge length (m): L = 1 m with K = 301 nodes.
-pub const REFERENCE_EDGE: f64 = 1.0 / 300.0;
 
 /// A case whose parameters passed [`CaseParams::validated`], with the start
 /// shape that validation built, so that running it builds no knot again.
@@ -167,7 +165,10 @@ impl CaseParams {
         }
         let start = self.start_shape().map_err(|e| vec![e])?;
         Ok(ValidCase {
-            params: self.clone(),
+            params: CaseParams {
+                nodes: Some(self.node_count()),
+                ..self.clone()
+            },
             start,
         })
     }
@@ -182,7 +183,7 @@ impl CaseParams {
         KnotSpec {
             n: self.n,
             length: self.length,
-            nodes: self.nodes,
+            nodes: self.node_count(),
             radius: self.h,
             clamp_span: self.end_to_end,
             pass_length: self.braid_length,
@@ -190,18 +191,32 @@ impl CaseParams {
         }
     }
 
-    /// The (largest) time step: `dt` if given, else [`REFERENCE_DT`] scaled by the square of
-    /// the edge length relative to the paper's (L = 1 m, K = 301), capped at
-    /// 10 ms. The contact forces are explicit with the mass-only Delassus
-    /// operator (Sec. 3.2), which resists motion with a stiffness of about
-    /// m / dt^2 per node against a bending stiffness of about EI / l_e^3; keeping
-    /// their ratio as at the paper's resolution needs dt proportional to l_e^2.
-    /// With a constant dt, a finer mesh lets strands creep through sticking
-    /// contacts and the knot drifts along the rod.
+    /// The node count K: `nodes` if given, else the points of
+    /// `initial_shape`, else [`default_nodes`] (edges of at most
+    /// [`EDGE_RADII`] h, at least the paper's 301).
+    pub fn node_count(&self) -> usize {
+        match (self.nodes, &self.initial_shape) {
+            (Some(k), _) => k,
+            (None, Some(points)) => points.len(),
+            (None, None) => default_nodes(self.length, self.h, MAX_NODES),
+        }
+    }
+
+    /// The (largest) time step: `dt` if given, else [`REFERENCE_DT`] scaled
+    /// so that the rod's bending stiffness at the edge scale, EI / l_e^3,
+    /// keeps its ratio to the inertial stiffness m / dt^2 with which the
+    /// explicit contact solve pushes (Sec. 3.2, eq. 10: the mass-only
+    /// Delassus operator) at the paper's: dt proportional to l_e^2 / (c h),
+    /// c the simulated wave speed ([`Scales`]), at most [`scales::MAX_DT`].
+    /// A longer step lets strands creep through sticking contacts. Rods
+    /// thicker than the paper's keep the paper's step at their edge length,
+    /// which the rule would shorten (Figs 7 and 11 are measured with it).
     pub fn time_step(&self) -> f64 {
         self.dt.unwrap_or_else(|| {
-            let edge = self.length / (self.nodes.max(2) - 1) as f64;
-            (REFERENCE_DT * (edge / REFERENCE_EDGE).powi(2)).min(1e-2)
+            let edge = self.length / (self.node_count().max(2) - 1) as f64;
+            let thinner = (REFERENCE_RADIUS / self.h).max(1.0);
+            let slowness = self.scales().slowness;
+            (REFERENCE_DT * slowness * thinner * (edge / REFERENCE_EDGE).powi(2)).min(scales::MAX_DT)
         })
     }
 
@@ -229,7 +244,7 @@ mod tests {
         .into_iter()
         .map(|(n, nodes, mu)| CaseParams {
             n,
-            nodes,
+            nodes: Some(nodes),
             mu,
             ..CaseParams::default()
         })
@@ -239,7 +254,7 @@ mod tests {
             assert_eq!(
                 c.validate_in(&mut checks),
                 c.validate(),
-                "n {} nodes {} mu {}",
+                "n {} nodes {:?} mu {}",
                 c.n,
                 c.nodes,
                 c.mu
@@ -263,26 +278,55 @@ mod tests {
         assert_eq!(fields, ["n", "h", "mu"]);
     }
 
+    /// The step is l_e^2 / (c h) times the paper's: squared in the edge,
+    /// proportional to the radius of a thinner rod at its default node count
+    /// and to the simulated wave time; a given dt is taken as it is.
     #[test]
-    fn automatic_time_step_scales_with_the_squared_edge() {
-        let paper = CaseParams::default();
-        assert!((paper.time_step() - REFERENCE_DT).abs() < 1e-15);
+    fn automatic_time_step_keeps_the_papers_contact_stiffness() {
+        let with = |p: CaseParams| p.time_step() / REFERENCE_DT;
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert_eq!(with(CaseParams::default()), 1.0);
         let finer = CaseParams {
-            nodes: 401,
+            nodes: Some(401),
             ..CaseParams::default()
         };
-        assert!((finer.time_step() - REFERENCE_DT * 0.75 * 0.75).abs() < 1e-15);
+        assert!(close(with(finer), 0.75 * 0.75));
         let given = CaseParams {
-            nodes: 401,
+            nodes: Some(401),
             dt: Some(2e-3),
             ..CaseParams::default()
         };
         assert_eq!(given.time_step(), 2e-3);
         let coarse = CaseParams {
-            nodes: 51,
+            nodes: Some(51),
             ..CaseParams::default()
         };
-        assert_eq!(coarse.time_step(), 1e-2);
+        assert_eq!(coarse.time_step(), scales::MAX_DT);
+        let thin = CaseParams {
+            h: 4e-4,
+            ..CaseParams::default()
+        };
+        assert_eq!(thin.node_count(), 1201);
+        assert!(
+            close(with(thin), 0.25),
+            "edges 4 times shorter, the radius 4 times smaller"
+        );
+        let thick = CaseParams {
+            h: 3.4e-3,
+            ..CaseParams::default()
+        };
+        assert_eq!(with(thick), 1.0, "the paper's step at the paper's edge");
+        let steel = CaseParams {
+            youngs_modulus: 2e11,
+            density: 7850.0,
+            ..CaseParams::default()
+        };
+        assert!(close(with(steel), 1.0), "mass scaling: the paper's waves");
+        let soft = CaseParams {
+            youngs_modulus: 1.8e4,
+            ..CaseParams::default()
+        };
+        assert!(close(with(soft), 10.0), "waves 10 times slower");
     }
 
     /// The builder's own knot is a valid start shape; each broken variant is
@@ -303,7 +347,12 @@ mod tests {
             assert_eq!(errors[0].field, "initial_shape");
             errors[0].reason.clone()
         };
-        assert!(reason(with(points[..300].to_vec())).contains("300 points, but nodes = 301"));
+        let given = CaseParams {
+            nodes: Some(301),
+            ..with(points[..300].to_vec())
+        };
+        assert!(reason(given).contains("300 points, but nodes = 301"));
+        assert_eq!(with(points[..300].to_vec()).node_count(), 300, "null nodes: the shape's");
         let mut nan = points.clone();
         nan[7][1] = f64::NAN;
         assert!(reason(with(nan)).contains("point 7 is not finite"));

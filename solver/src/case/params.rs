@@ -30,14 +30,16 @@ pub struct CaseParams {
     pub gravity: [f64; 3],
     /// Rod length L (m).
     pub length: f64,
-    /// Node count K.
-    pub nodes: usize,
+    /// Node count K; `None`: [`CaseParams::node_count`]'s.
+    pub nodes: Option<usize>,
     /// Young's modulus E (Pa).
     pub youngs_modulus: f64,
     /// Poisson's ratio nu.
     pub poisson_ratio: f64,
     /// Density rho (kg/m^3).
     pub density: f64,
+    /// Scale the inertia up to the paper's pull rate ([`CaseParams::scales`]).
+    pub mass_scaling: bool,
     /// Clamp speed (m/s).
     pub pull_speed: f64,
     /// Pull schedule.
@@ -48,8 +50,8 @@ pub struct CaseParams {
     pub adaptive_dt: bool,
     /// Contact solve's relative tolerance.
     pub contact_tolerance: f64,
-    /// Longest relaxation (s).
-    pub relax_time: f64,
+    /// Longest relaxation (s); `None`: [`CaseParams::relax_limit`]'s.
+    pub relax_time: Option<f64>,
     /// Relaxation's kinetic-to-elastic energy ratio.
     pub relax_tolerance: f64,
     /// Damping rate while pulling (1/s).
@@ -83,16 +85,17 @@ impl Default for CaseParams {
             start_twist: None,
             gravity: [0.0; 3],
             length: 1.0,
-            nodes: 301,
+            nodes: None,
             youngs_modulus: 1.8e6,
             poisson_ratio: 0.5,
             density: 1000.0,
+            mass_scaling: true,
             pull_speed: 3e-3,
             protocol: Protocol::default(),
             dt: None,
             adaptive_dt: true,
             contact_tolerance: 1e-6,
-            relax_time: 2.0,
+            relax_time: None,
             relax_tolerance: 1e-4,
             damping: 0.0,
             end_to_end: None,
@@ -245,12 +248,17 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "nodes",
         unit: "",
-        default: "301",
+        default: "null",
         range: Range::Integers(51, MAX_NODES as u64),
-        null: None,
+        null: Some(
+            "edges of at most 2.08 h (the paper's L = 1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most \
+             4001; with initial_shape, its point count",
+        ),
         paper: "301",
-        doc: "Node count K (the knot builder needs edges of at most 4h).",
-        value: |p| Some(Value::Integer(p.nodes as u64)),
+        doc: "Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the \
+              paper's rod is resolved (docs/FIDELITY.md, \"Any rod\": the convergence in K). The report's params \
+              give the K used.",
+        value: |p| p.nodes.map(|k| Value::Integer(k as u64)),
     },
     Parameter {
         name: "youngs_modulus",
@@ -281,6 +289,20 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "1000 (the code)",
         doc: "Density rho.",
         value: |p| Some(Value::Number(p.density)),
+    },
+    Parameter {
+        name: "mass_scaling",
+        unit: "",
+        default: "true",
+        range: Range::Flag,
+        null: None,
+        paper: "false",
+        doc: "Compute a rod whose waves are faster than the paper's rod's, relative to pull_speed, with its inertia \
+              scaled up to the paper's pull rate pull_speed / sqrt(E / rho) (mass scaling; its weight stays \
+              physical): inversion is quasi-static, so its l_k bar does not depend on E or rho, and a steel rod \
+              then costs what the paper's rubber rod costs. The report gives the scale (mass_scale) and whether \
+              the case stayed quasi-static. false: the physical inertia, for studies of the pull's speed.",
+        value: UNCHECKED,
     },
     Parameter {
         name: "pull_speed",
@@ -316,8 +338,9 @@ pub const PARAMETERS: &[Parameter] = &[
         default: "null",
         range: closed(1e-6, 1e-2),
         null: Some(
-            "0.5 ms (half the paper's code's 1 ms, converged within 0.4 %) at L = 1 m, K = 301, scaled with the \
-             square of the edge length L/(K-1), at most 1e-2 s",
+            "0.5 ms for the paper's rod (half its code's 1 ms, converged within 0.4 %), scaled as l_e^2 / (c h) \
+             with the edge length l_e, the simulated wave speed c and, for rods thinner than the paper's, the \
+             radius h, so that every rod's contacts are stepped as the paper's; at most 1e-2 s",
         ),
         paper: "1 ms (the code)",
         doc: "Time step; with adaptive_dt the largest step.",
@@ -349,12 +372,14 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "relax_time",
         unit: "s",
-        default: "2.0",
+        default: "null",
         range: closed(0.0, 100.0),
-        null: None,
+        null: Some(
+            "2 s in the case's time unit: the paper's rod's 2 s, scaled as its knot's dynamics (report's time_unit)",
+        ),
         paper: "",
         doc: "Longest relaxation with the ends held before pulling.",
-        value: |p| Some(Value::Number(p.relax_time)),
+        value: |p| p.relax_time.map(Value::Number),
     },
     Parameter {
         name: "relax_tolerance",
@@ -549,6 +574,8 @@ mod tests {
         let set = CaseParams {
             start_twist: Some(0.0),
             dt: Some(1e-3),
+            nodes: Some(401),
+            relax_time: Some(1.0),
             end_to_end: Some(0.3),
             braid_length: Some(0.2),
             stop_after_inversion: Some(5.0),

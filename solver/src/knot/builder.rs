@@ -47,10 +47,15 @@ const WINDOW_MARGIN: f64 = 2e-3;
 /// The default end-to-end distance stays this fraction of the width inside.
 const DEFAULT_MARGIN: f64 = 0.05;
 
+/// The default knot's size in radii: its lengths are fractions of the knot
+/// length `min(L, KNOT_RADII h)` (the paper's L/h), the tails taking the rest
+/// of a longer rod, so that a slender rod's knot starts as tight, in l_k bar,
+/// as the paper's.
+pub const KNOT_RADII: f64 = 625.0;
 /// Default strand length per braid pass, loop remainder and end-to-end
-/// distance, as fractions of `L`, for `n = 1..=8` (`n <= 4`: the relaxed
-/// knots of the paper at `h = 1.6 mm`; beyond, extrapolated with the braid
-/// growing and the loop shrinking).
+/// distance, as fractions of the knot length ([`KNOT_RADII`]), for
+/// `n = 1..=8` (`n <= 4`: the relaxed knots of the paper at `h = 1.6 mm`;
+/// beyond, extrapolated with the braid growing and the loop shrinking).
 const DEFAULT_BRAID: [f64; 8] = [0.12, 0.19, 0.24, 0.28, 0.30, 0.315, 0.33, 0.345];
 const DEFAULT_TAIL: [f64; 8] = [0.08, 0.075, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035];
 const DEFAULT_END_TO_END: [f64; 8] = [0.28, 0.30, 0.31, 0.32, 0.31, 0.30, 0.29, 0.28];
@@ -67,21 +72,34 @@ pub struct KnotSpec {
     /// Cross-section radius `h`, below `L / 50`.
     pub radius: f64,
     /// Clamp-to-clamp distance `l_c`. Default: `[0.28, 0.30, 0.31, 0.32, 0.31,
-    /// 0.30, 0.29, 0.28][n-1] L`, moved into the feasible range if needed.
+    /// 0.30, 0.29, 0.28][n-1] L_k + L - L_k` with the knot length `L_k`
+    /// ([`KNOT_RADII`]), moved into the feasible range if needed.
     #[serde(default)]
     pub clamp_span: Option<f64>,
     /// Strand length of each braid pass `l_b`. Default: `[0.12, 0.19, 0.24,
-    /// 0.28, 0.30, 0.315, 0.33, 0.345][n-1] L`, but at least
+    /// 0.28, 0.30, 0.315, 0.33, 0.345][n-1] L_k`, but at least
     /// [`BRAID_MARGIN`] times the shortest braid for radius `h`.
     #[serde(default)]
     pub pass_length: Option<f64>,
-    /// Loop length `l_l`. Default: `L - 2 l_b - 2 t L` with the tail fraction
+    /// Loop length `l_l`. Default: `L_k - 2 l_b - 2 t L_k` with the tail fraction
     /// `t = [0.08, 0.075, 0.055, 0.05, 0.045, 0.04, 0.04, 0.035][n-1]`.
     #[serde(default)]
     pub loop_length: Option<f64>,
 }
 
 impl KnotSpec {
+    /// The knot length `L_k = min(L, KNOT_RADII h)` the default lengths are
+    /// fractions of ([`KNOT_RADII`]).
+    pub fn knot_length(&self) -> f64 {
+        let scaled = KNOT_RADII * self.radius;
+        // The paper's rod (L = 625 h up to rounding) keeps L itself.
+        if scaled < self.length * (1.0 - 1e-9) {
+            scaled
+        } else {
+            self.length
+        }
+    }
+
     /// The paper's setting: `L = 1 m`, `K = 301`, `h = 1.6 mm`, default shape.
     pub fn paper(n: u32) -> Self {
         Self {
@@ -229,6 +247,8 @@ struct Design {
     loop_steps: usize,
     edge: f64,
     spacing: f64,
+    /// The length each tail has beyond the knot's: `(L - L_k) / 2`.
+    extra_tail: f64,
 }
 
 /// Precomputed Simpson samples of `cos psi` and `(a dpsi/du)^2` for strand lengths.
@@ -274,6 +294,7 @@ impl Design {
             loop_steps: 0,
             edge,
             spacing: edge.min(braid.radius) / 4.0,
+            extra_tail: 0.5 * (spec.length - spec.knot_length()),
         }
     }
 
@@ -320,8 +341,11 @@ impl Design {
         b
     }
 
+    /// The straight end of a tail, on the pull axis at its clamp: a quarter
+    /// of the knot's tail (at least 2.5 edges) and the length a rod longer
+    /// than its knot adds to each tail ([`KnotSpec::knot_length`]).
     fn clamp_section(&self, tail: f64) -> f64 {
-        (2.5 * self.edge).max(0.25 * tail)
+        (2.5 * self.edge).max(0.25 * (tail - self.extra_tail)) + self.extra_tail
     }
 
     /// Half clamp-to-clamp distance at braid half angle `theta`.
@@ -422,9 +446,10 @@ fn lengths(spec: &KnotSpec) -> Result<Lengths, KnotError> {
     let index = spec.n as usize - 1;
     let design = Design::new(spec, GAPS[0]);
     let shortest = design.strand(design.braid.min_centreline(MIN_PITCH), 0.0).0;
+    let knot = spec.knot_length();
     let strand = spec
         .pass_length
-        .unwrap_or((DEFAULT_BRAID[index] * length).max(BRAID_MARGIN * shortest));
+        .unwrap_or((DEFAULT_BRAID[index] * knot).max(BRAID_MARGIN * shortest));
     if strand < shortest {
         return Err(KnotError::BraidTooShort {
             pass_length: strand,
@@ -440,7 +465,7 @@ fn lengths(spec: &KnotSpec) -> Result<Lengths, KnotError> {
     }
     let loop_length = spec
         .loop_length
-        .unwrap_or(length - 2.0 * strand - 2.0 * DEFAULT_TAIL[index] * length);
+        .unwrap_or(knot - 2.0 * strand - 2.0 * DEFAULT_TAIL[index] * knot);
     let tail = 0.5 * (length - 2.0 * strand - loop_length);
     let min_tail = 3.0 * design.edge;
     if tail < min_tail {
@@ -505,10 +530,13 @@ struct Window {
 }
 
 impl Window {
-    /// `fraction * L`, moved `DEFAULT_MARGIN` of the width inside the window.
-    fn default(&self, fraction: f64, length: f64) -> f64 {
+    /// `fraction * L_k + L - L_k` (the knot length `L_k` and the rod's
+    /// `L`, [`KnotSpec::knot_length`]), moved `DEFAULT_MARGIN` of the width
+    /// inside the window.
+    fn default(&self, fraction: f64, spec: &KnotSpec) -> f64 {
         let margin = DEFAULT_MARGIN * (self.max - self.min);
-        (fraction * length).clamp(self.min + margin, self.max - margin)
+        let knot = spec.knot_length();
+        (fraction * knot + (spec.length - knot)).clamp(self.min + margin, self.max - margin)
     }
 
     /// The range reported to users: shrunk by `WINDOW_MARGIN` of the width,
@@ -594,7 +622,7 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
     // computed for the tails lengthened by it.
     let window = design.window(tail)?;
     let provisional = spec.clamp_span.map_or_else(
-        || window.default(fraction, length),
+        || window.default(fraction, spec),
         |l| l.clamp(window.min, window.max),
     );
     let (_, curve) = design
@@ -606,7 +634,7 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
     let clamp_span = match spec.clamp_span {
         Some(l) if l < window.min || l > window.max => return Err(out_of_range(l)),
         Some(l) => l,
-        None => window.default(fraction, length),
+        None => window.default(fraction, spec),
     };
     let (knot, _) = design
         .resample(clamp_span, curve, spec.nodes)

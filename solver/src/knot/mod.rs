@@ -8,8 +8,8 @@ pub mod topology;
 mod twist;
 
 pub use builder::{
-    BRAID_MARGIN, KnotError, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
-    MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
+    BRAID_MARGIN, KNOT_RADII, KnotError, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO,
+    MIN_BEND, MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
 pub use start::{StartShape, built_start, checked_start};
 pub use topology::{

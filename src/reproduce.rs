@@ -149,8 +149,14 @@ fn jobs() -> Result<Vec<Job>> {
     v.push(job("dt_half", |p| p.dt = Some(p.time_step() / 2.0)));
     v.push(job("dt_fixed", |p| p.adaptive_dt = false));
     v.push(job("K401", |p| p.nodes = Some(401)));
-    v.push(job("speed_half", |p| p.pull_speed /= 2.0));
-    v.push(job("speed_1mm", |p| p.pull_speed = 1e-3));
+    v.push(job("speed_half", |p| {
+        p.pull_speed = Some(p.clamp_speed() / 2.0);
+        p.mass_scaling = false;
+    }));
+    v.push(job("speed_1mm", |p| {
+        p.pull_speed = Some(1e-3);
+        p.mass_scaling = false;
+    }));
     v.push(job("contact_tight", |p| p.contact_tolerance /= 100.0));
     v.push(job("adaptive", |p| p.protocol = Protocol::Adaptive));
     Ok(v)

@@ -258,7 +258,7 @@ pub fn markdown(
                     .trim_end_matches('0')
                     .trim_end_matches('.'),
                 if j.params.adaptive_dt { " or less" } else { "" },
-                j.params.pull_speed * 1e3
+                j.params.clamp_speed() * 1e3
             ),
             command_of(j),
             format!(
@@ -286,7 +286,7 @@ pub fn markdown(
         } else {
             "constant"
         },
-        d.pull_speed * 1e3,
+        d.clamp_speed() * 1e3,
         d.mu,
         d.h * 1e3,
         d.contact_tolerance,

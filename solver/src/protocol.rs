@@ -79,7 +79,7 @@ pub fn pulls_fast(params: &CaseParams) -> bool {
 /// fast. Queues hand out the costliest cases first, so that a long case does
 /// not start last and leave the other workers idle.
 pub fn work_estimate(params: &CaseParams) -> f64 {
-    let steps = params.length / (params.pull_speed * params.time_step());
+    let steps = params.length / (params.clamp_speed() * params.time_step());
     let fast = if pulls_fast(params) { FAST_FACTOR } else { 1.0 };
     steps * params.node_count() as f64 / fast
 }
@@ -1016,7 +1016,7 @@ impl<'a> Case<'a> {
 
     /// Both clamps moving apart at the stage's speed at `l_k_bar`.
     fn drive(&mut self, pull: &Pull, l_k_bar: f64) {
-        let v = pull.axis * (pull.stage.speed(pull.stage_start - l_k_bar) * self.params.pull_speed);
+        let v = pull.axis * (pull.stage.speed(pull.stage_start - l_k_bar) * self.params.clamp_speed());
         self.world.rods[0].move_clamp(End::Start, -v);
         self.world.rods[0].move_clamp(End::Finish, v);
     }

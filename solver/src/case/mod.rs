@@ -92,7 +92,8 @@ pub struct ValidCase {
 }
 
 impl ValidCase {
-    /// The validated parameters.
+    /// The validated parameters, with the node count and the pull speed
+    /// resolved ([`CaseParams::node_count`], [`CaseParams::clamp_speed`]).
     pub fn params(&self) -> &CaseParams {
         &self.params
     }
@@ -167,6 +168,7 @@ impl CaseParams {
         Ok(ValidCase {
             params: CaseParams {
                 nodes: Some(self.node_count()),
+                pull_speed: Some(self.clamp_speed()),
                 ..self.clone()
             },
             start,
@@ -207,7 +209,8 @@ impl CaseParams {
     /// keeps its ratio to the inertial stiffness m / dt^2 with which the
     /// explicit contact solve pushes (Sec. 3.2, eq. 10: the mass-only
     /// Delassus operator) at the paper's: dt proportional to l_e^2 / (c h),
-    /// c the simulated wave speed ([`Scales`]), at most [`scales::MAX_DT`].
+    /// c the simulated wave speed ([`Scales`]), at most
+    /// [`scales::MAX_DT_RATIO`] times the paper's step at that wave speed.
     /// A longer step lets strands creep through sticking contacts. Rods
     /// thicker than the paper's keep the paper's step at their edge length,
     /// which the rule would shorten (Figs 7 and 11 are measured with it).
@@ -216,7 +219,8 @@ impl CaseParams {
             let edge = self.length / (self.node_count().max(2) - 1) as f64;
             let thinner = (REFERENCE_RADIUS / self.h).max(1.0);
             let slowness = self.scales().slowness;
-            (REFERENCE_DT * slowness * thinner * (edge / REFERENCE_EDGE).powi(2)).min(scales::MAX_DT)
+            let edges = (thinner * (edge / REFERENCE_EDGE).powi(2)).min(scales::MAX_DT_RATIO);
+            REFERENCE_DT * slowness * edges
         })
     }
 
@@ -301,7 +305,7 @@ mod tests {
             nodes: Some(51),
             ..CaseParams::default()
         };
-        assert_eq!(coarse.time_step(), scales::MAX_DT);
+        assert_eq!(with(coarse), scales::MAX_DT_RATIO);
         let thin = CaseParams {
             h: 4e-4,
             ..CaseParams::default()
@@ -321,7 +325,16 @@ mod tests {
             density: 7850.0,
             ..CaseParams::default()
         };
-        assert!(close(with(steel), 1.0), "mass scaling: the paper's waves");
+        let faster = (2e11 / 7850.0 / 1800.0f64).sqrt();
+        assert!(
+            close(with(steel.clone()) * faster, 1.0),
+            "the paper's rate: steel's waves"
+        );
+        let at_3mm = CaseParams {
+            pull_speed: Some(3e-3),
+            ..steel
+        };
+        assert!(close(with(at_3mm), 1.0), "mass scaling: the paper's waves");
         let soft = CaseParams {
             youngs_modulus: 1.8e4,
             ..CaseParams::default()
@@ -352,7 +365,11 @@ mod tests {
             ..with(points[..300].to_vec())
         };
         assert!(reason(given).contains("300 points, but nodes = 301"));
-        assert_eq!(with(points[..300].to_vec()).node_count(), 300, "null nodes: the shape's");
+        assert_eq!(
+            with(points[..300].to_vec()).node_count(),
+            300,
+            "null nodes: the shape's"
+        );
         let mut nan = points.clone();
         nan[7][1] = f64::NAN;
         assert!(reason(with(nan)).contains("point 7 is not finite"));

@@ -48,8 +48,9 @@ pub const REFERENCE_DT: f64 = 5e-4;
 pub const EDGE_RADII: f64 = REFERENCE_EDGE / REFERENCE_RADIUS;
 /// The paper's rod's longest relaxation (s).
 pub const REFERENCE_RELAX_TIME: f64 = 2.0;
-/// The largest time step (s) taken without one given.
-pub const MAX_DT: f64 = 1e-2;
+/// The largest time step taken without one given, over the paper's rod's
+/// step in the rod's time unit (a coarse mesh's step is capped).
+pub const MAX_DT_RATIO: f64 = 20.0;
 
 /// Pi = u / sqrt(E / rho): the clamp speed over the rod's wave speed.
 pub fn pull_rate(pull_speed: f64, youngs_modulus: f64, density: f64) -> f64 {
@@ -86,9 +87,19 @@ pub struct Scales {
 }
 
 impl CaseParams {
+    /// The clamps' speed (m/s): `pull_speed`, else the paper's pull rate for
+    /// this rod, [`REFERENCE_PULL_SPEED`] times its wave speed over the
+    /// paper's rod's.
+    pub fn clamp_speed(&self) -> f64 {
+        self.pull_speed.unwrap_or_else(|| {
+            let waves = (self.youngs_modulus / self.density) / (REFERENCE_YOUNGS_MODULUS / REFERENCE_DENSITY);
+            REFERENCE_PULL_SPEED * waves.sqrt()
+        })
+    }
+
     /// The case's physical pull rate Pi ([`pull_rate`]).
     pub fn pull_rate(&self) -> f64 {
-        pull_rate(self.pull_speed, self.youngs_modulus, self.density)
+        pull_rate(self.clamp_speed(), self.youngs_modulus, self.density)
     }
 
     /// The longest relaxation (s): `relax_time`, else
@@ -106,9 +117,10 @@ impl CaseParams {
         } else {
             1.0
         };
-        let pull_rate_ratio = pull_rate(self.pull_speed, self.youngs_modulus, self.density * mass_scale)
-            / reference_pull_rate();
-        let slowness = pull_rate_ratio * (REFERENCE_PULL_SPEED / self.pull_speed);
+        let speed = self.clamp_speed();
+        let pull_rate_ratio =
+            pull_rate(speed, self.youngs_modulus, self.density * mass_scale) / reference_pull_rate();
+        let slowness = pull_rate_ratio * (REFERENCE_PULL_SPEED / speed);
         Scales {
             mass_scale,
             slowness,
@@ -140,40 +152,59 @@ mod tests {
         assert_eq!(default_nodes(1.0, 1e-4, 4001), 4001);
     }
 
+    /// By default every rod is pulled at the paper's rate: the same
+    /// problem in the units of eq. (11), with the time unit of its waves.
+    #[test]
+    fn the_default_pull_is_at_the_papers_rate() {
+        for (e, rho) in [(1e4, 8000.0), (1.8e6, 1000.0), (2e11, 7850.0), (3e9, 500.0)] {
+            let p = CaseParams {
+                youngs_modulus: e,
+                density: rho,
+                ..CaseParams::default()
+            };
+            let s = p.scales();
+            assert_eq!(s.mass_scale, 1.0);
+            assert!((p.pull_rate() / reference_pull_rate() - 1.0).abs() < 1e-12);
+            let waves = (e / rho / 1800.0).sqrt();
+            assert!((s.time_unit * waves - 1.0).abs() < 1e-12, "E {e} rho {rho}");
+        }
+        assert_eq!(CaseParams::default().clamp_speed(), REFERENCE_PULL_SPEED);
+    }
+
     /// Mass scaling makes the simulated wave speed u / Pi_ref: a rod 100
-    /// times stiffer gets 100 times the inertia and the paper's time unit; a
-    /// faster pull than the paper's is computed with the physical inertia.
+    /// times stiffer pulled at 3 mm/s gets 100 times the inertia and the
+    /// paper's time unit; a faster pull than the paper's is computed with the
+    /// physical inertia.
     #[test]
     fn mass_scaling_gives_the_papers_pull_rate() {
-        let stiff = CaseParams {
-            youngs_modulus: 1.8e8,
+        let at_3mm = |e: f64, rho: f64| CaseParams {
+            youngs_modulus: e,
+            density: rho,
+            pull_speed: Some(3e-3),
             ..CaseParams::default()
         };
-        let s = stiff.scales();
+        let s = at_3mm(1.8e8, 1000.0).scales();
         assert!((s.mass_scale - 100.0).abs() < 1e-9 && (s.time_unit - 1.0).abs() < 1e-12);
-        let steel = CaseParams {
-            youngs_modulus: 2e11,
-            density: 7850.0,
-            ..CaseParams::default()
-        };
+        let steel = at_3mm(2e11, 7850.0);
         let simulated = pull_rate(3e-3, 2e11, 7850.0 * steel.scales().mass_scale);
         assert!((simulated / reference_pull_rate() - 1.0).abs() < 1e-12);
+        assert!((steel.scales().pull_rate_ratio - 1.0).abs() < 1e-12);
         let slow = CaseParams {
-            pull_speed: 1e-3,
+            pull_speed: Some(1e-3),
             ..CaseParams::default()
         };
         let s = slow.scales();
         assert!((s.mass_scale - 9.0).abs() < 1e-9 && (s.time_unit - 3.0).abs() < 1e-12);
-        let fast = CaseParams {
-            youngs_modulus: 1.8e4,
-            ..CaseParams::default()
-        };
-        let s = fast.scales();
-        assert_eq!(s.mass_scale, 1.0);
-        assert!((s.time_unit - 10.0).abs() < 1e-9, "a wave speed 10 times slower");
+        let soft = at_3mm(1.8e4, 1000.0).scales();
+        assert_eq!(soft.mass_scale, 1.0);
+        assert!((soft.time_unit - 10.0).abs() < 1e-9, "waves 10 times slower");
+        assert!(
+            (soft.pull_rate_ratio - 10.0).abs() < 1e-9,
+            "a pull 10 times the paper's rate"
+        );
         let physical = CaseParams {
             mass_scaling: false,
-            ..stiff
+            ..at_3mm(1.8e8, 1000.0)
         };
         assert_eq!(physical.scales().mass_scale, 1.0);
         assert!((physical.scales().time_unit - 0.1).abs() < 1e-12);

@@ -1,6 +1,8 @@
-//! knotsweep's load generators, kept out of the product binary: the queue's
-//! throughput ([`bench_queue`]) and the service under a sustained mixed load
-//! ([`bench_soak`]). `cargo run --release -p xtask -- bench-queue | bench-soak`;
-//! BENCHMARKS.md records their figures.
+//! knotsweep's load generators and benchmarks, kept out of the product
+//! binary: the queue's throughput ([`bench_queue`]), the service under a
+//! sustained mixed load ([`bench_soak`]) and the solver's cost across rods
+//! ([`bench_rods`]). `cargo run --release -p xtask -- bench-queue | bench-soak
+//! | bench-rods`; BENCHMARKS.md records their figures.
 pub mod bench_queue;
+pub mod bench_rods;
 pub mod bench_soak;

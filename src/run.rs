@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use report::charts::{Quantity, case_chart};
 use serde_json::Value;
-use solver::case::{CaseParams, PARAMETERS, Parameter, Range, ValidCase};
+use solver::case::{CaseParams, Group, PARAMETERS, Parameter, Range, ValidCase};
 use solver::certify::Uncertainty;
 use solver::protocol::{self, CaseReport, Status};
 use std::path::PathBuf;
@@ -47,7 +47,9 @@ impl clap::FromArgMatches for ParamFlags {
 impl clap::Args for ParamFlags {
     fn augment_args(cmd: clap::Command) -> clap::Command {
         let defaults = serde_json::to_value(CaseParams::default()).expect("params serialise");
-        cmd.args(PARAMETERS.iter().map(|p| flag(p, &defaults[p.name])))
+        let mut grouped: Vec<&Parameter> = PARAMETERS.iter().collect();
+        grouped.sort_by_key(|p| Group::ALL.iter().position(|g| *g == p.group));
+        cmd.args(grouped.into_iter().map(|p| flag(p, &defaults[p.name])))
     }
 
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
@@ -57,7 +59,9 @@ impl clap::Args for ParamFlags {
 
 /// The flag of parameter `p`, parsed to the JSON type of its `default`.
 fn flag(p: &Parameter, default: &Value) -> clap::Arg {
-    let arg = clap::Arg::new(p.name).long(p.name.replace('_', "-"));
+    let arg = clap::Arg::new(p.name)
+        .long(p.name.replace('_', "-"))
+        .help_heading(p.group.title());
     if from_file(p) {
         return arg
             .value_name("FILE")

@@ -3,16 +3,21 @@
 //! (every field, its JSON type and the paper's default) plus the table
 //! `solver::case::PARAMETERS`: each field's description, its words and its
 //! bounds where they are fixed numbers (`CaseParams::validate` checks the
-//! same table and is authoritative).
+//! same table and is authoritative), and its group as `x-group` (the web
+//! form's sections).
 use serde_json::Value;
 use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
+use utoipa::openapi::extensions::Extensions;
 use utoipa::openapi::schema::{ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
 
 fn param_schema(name: &str, default: &Value) -> Schema {
+    let parameter = PARAMETERS.iter().find(|p| p.name == name);
+    let integer = parameter.is_some_and(|p| matches!(p.range, Range::Integers(..)));
     let ty = match default {
         Value::Number(n) if n.is_u64() || n.is_i64() => SchemaType::Type(Type::Integer),
         Value::Number(_) => SchemaType::Type(Type::Number),
+        Value::Null if integer => SchemaType::from_iter([Type::Integer, Type::Null]),
         Value::Null => SchemaType::from_iter([Type::Number, Type::Null]),
         Value::Bool(_) => SchemaType::Type(Type::Boolean),
         Value::Array(_) => SchemaType::Type(Type::Array),
@@ -21,8 +26,11 @@ fn param_schema(name: &str, default: &Value) -> Schema {
     let object = ObjectBuilder::new()
         .schema_type(ty)
         .default(Some(default.clone()));
-    match PARAMETERS.iter().find(|p| p.name == name) {
-        Some(p) => with_range(object.description(Some(p.description())), p),
+    match parameter {
+        Some(p) => {
+            let group = Extensions::from_iter([("x-group", serde_json::to_value(p.group).expect("a word"))]);
+            with_range(object.description(Some(p.description())), p).extensions(Some(group))
+        }
         None => object,
     }
     .into()
@@ -93,6 +101,8 @@ mod tests {
         assert_eq!(props["mu"]["maximum"].as_f64(), Some(2.0));
         assert_eq!(props["max_force_bar"]["exclusiveMinimum"].as_f64(), Some(0.0));
         assert!(props["max_force_bar"].get("exclusiveMaximum").is_none());
+        assert_eq!(props["mu"]["x-group"], json!("friction"));
+        assert_eq!(props["nodes"]["type"], json!(["integer", "null"]));
         let h = props["h"]["description"].as_str().unwrap();
         assert!(h.contains("Range: [L/16000, L/50) m."), "{h}");
     }

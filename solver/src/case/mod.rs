@@ -19,7 +19,7 @@ pub use scales::{
     reference_pull_rate,
 };
 use serde::{Deserialize, Serialize};
-pub use table::{Bound, Parameter, Range};
+pub use table::{Bound, Group, Parameter, Range};
 
 /// Revision of the physics: raised whenever a change to the model or its
 /// defaults changes results, and part of every case's cache key, so that

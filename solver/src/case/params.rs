@@ -1,6 +1,6 @@
 //! `CaseParams` and its table, [`PARAMETERS`]: each parameter's unit,
 //! default, range, paper value and documentation, written once.
-use super::table::{Bound, Parameter, Range, UNCHECKED, Value};
+use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{Candidates, ContactSolve, FrictionLaw, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol};
 use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
 use serde::{Deserialize, Serialize};
@@ -117,6 +117,7 @@ const fn closed(lo: f64, hi: f64) -> Range {
 pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "n",
+        group: Group::Knot,
         unit: "",
         default: "3",
         range: Range::Integers(1, MAX_PASSES as u64),
@@ -127,6 +128,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "h",
+        group: Group::Rod,
         unit: "m",
         default: "1.6e-3",
         range: Range::LengthOver(
@@ -141,6 +143,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "mu",
+        group: Group::Friction,
         unit: "",
         default: "0.1",
         range: closed(0.0, 2.0),
@@ -151,6 +154,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "friction_law",
+        group: Group::Friction,
         unit: "",
         default: "\"isotropic\"",
         range: Range::Words(&["isotropic", "sliding_direction"]),
@@ -163,6 +167,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "rolling",
+        group: Group::Friction,
         unit: "",
         default: "false",
         range: Range::Flag,
@@ -180,6 +185,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "contact_solve",
+        group: Group::Solver,
         unit: "",
         default: "\"explicit\"",
         range: Range::Words(&["explicit", "implicit"]),
@@ -195,6 +201,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "contact_candidates",
+        group: Group::Solver,
         unit: "",
         default: "\"detected\"",
         range: Range::Words(&["detected", "predicted"]),
@@ -211,6 +218,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "start_twist",
+        group: Group::Knot,
         unit: "turns",
         default: "null",
         range: closed(-20.0, 20.0),
@@ -227,6 +235,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "gravity",
+        group: Group::Loading,
         unit: "m/s^2",
         default: "[0.0, 0.0, 0.0]",
         range: Range::Components(-1e3, 1e3),
@@ -237,6 +246,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "length",
+        group: Group::Rod,
         unit: "m",
         default: "1.0",
         range: closed(0.05, 100.0),
@@ -247,6 +257,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "nodes",
+        group: Group::Solver,
         unit: "",
         default: "null",
         range: Range::Integers(51, MAX_NODES as u64),
@@ -262,6 +273,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "youngs_modulus",
+        group: Group::Rod,
         unit: "Pa",
         default: "1.8e6",
         range: closed(1e3, 1e12),
@@ -272,6 +284,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "poisson_ratio",
+        group: Group::Rod,
         unit: "",
         default: "0.5",
         range: closed(0.0, 0.5),
@@ -282,6 +295,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "density",
+        group: Group::Rod,
         unit: "kg/m^3",
         default: "1000.0",
         range: closed(1.0, 1e5),
@@ -292,6 +306,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "mass_scaling",
+        group: Group::Solver,
         unit: "",
         default: "true",
         range: Range::Flag,
@@ -306,6 +321,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "pull_speed",
+        group: Group::Loading,
         unit: "m/s",
         default: "null",
         range: closed(1e-7, 100.0),
@@ -321,6 +337,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "protocol",
+        group: Group::Loading,
         unit: "",
         default: "\"adaptive\"",
         range: Range::Words(&["reference", "adaptive"]),
@@ -339,6 +356,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "dt",
+        group: Group::Solver,
         unit: "s",
         default: "null",
         range: closed(1e-9, 1.0),
@@ -354,6 +372,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "adaptive_dt",
+        group: Group::Solver,
         unit: "",
         default: "true",
         range: Range::Flag,
@@ -365,6 +384,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "contact_tolerance",
+        group: Group::Solver,
         unit: "",
         default: "1e-6",
         range: closed(1e-12, 1e-3),
@@ -377,6 +397,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "relax_time",
+        group: Group::Solver,
         unit: "s",
         default: "null",
         range: closed(0.0, 100.0),
@@ -389,6 +410,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "relax_tolerance",
+        group: Group::Solver,
         unit: "",
         default: "1e-4",
         range: closed(0.0, 1.0),
@@ -399,6 +421,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "damping",
+        group: Group::Solver,
         unit: "1/s",
         default: "0.0",
         range: closed(0.0, 1e4),
@@ -409,6 +432,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "end_to_end",
+        group: Group::Knot,
         unit: "m",
         default: "null",
         range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(1.0)),
@@ -419,6 +443,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "braid_length",
+        group: Group::Knot,
         unit: "m",
         default: "null",
         range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(2.0)),
@@ -429,6 +454,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "sample_interval",
+        group: Group::Solver,
         unit: "",
         default: "0.5",
         range: closed(1e-3, 100.0),
@@ -439,6 +465,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "min_l_k_bar",
+        group: Group::Loading,
         unit: "",
         default: "60.0",
         range: closed(0.0, 1e6),
@@ -449,6 +476,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "stop_after_inversion",
+        group: Group::Loading,
         unit: "",
         default: "10.0",
         range: closed(0.0, 1e6),
@@ -459,6 +487,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "max_force_bar",
+        group: Group::Loading,
         unit: "",
         default: "null",
         range: Range::Interval(Bound::Open(0.0), Bound::Open(f64::INFINITY)),
@@ -469,6 +498,7 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "initial_shape",
+        group: Group::Knot,
         unit: "m",
         default: "null",
         range: Range::Points,

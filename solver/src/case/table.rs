@@ -10,6 +10,9 @@ use super::{CaseParams, ParamError};
 pub struct Parameter {
     /// The JSON key and `CaseParams` field.
     pub name: &'static str,
+    /// The part of the case it belongs to (the web form's sections, the
+    /// CLI's help headings, the Python docstring's).
+    pub group: Group,
     /// SI unit; empty for pure numbers, words and flags.
     pub unit: &'static str,
     /// The default as JSON (`CaseParams::default`'s value, checked by a test).
@@ -24,6 +27,44 @@ pub struct Parameter {
     pub doc: &'static str,
     /// The value its range check reads; `None` when null.
     pub(super) value: fn(&CaseParams) -> Option<Value>,
+}
+
+/// The parts of a case, in the order forms show them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Group {
+    /// The knot: passes, start shape and twist.
+    Knot,
+    /// The rod: its size and material.
+    Rod,
+    /// Friction between the strands.
+    Friction,
+    /// How the knot is loaded and when the case stops.
+    Loading,
+    /// The solver's numerical options (forms fold them away).
+    Solver,
+}
+
+impl Group {
+    /// Every group, in form order.
+    pub const ALL: [Group; 5] = [
+        Group::Knot,
+        Group::Rod,
+        Group::Friction,
+        Group::Loading,
+        Group::Solver,
+    ];
+
+    /// The group's heading.
+    pub fn title(self) -> &'static str {
+        match self {
+            Group::Knot => "Knot",
+            Group::Rod => "Rod and material",
+            Group::Friction => "Friction",
+            Group::Loading => "Loading",
+            Group::Solver => "Solver (advanced)",
+        }
+    }
 }
 
 /// The values a parameter may take.

@@ -320,6 +320,12 @@ impl Stepper {
         }
     }
 
+    /// Drops the factorisation at hand, so that the next step assembles one:
+    /// after the rod's constraints or springs change.
+    pub fn forget_factorization(&mut self) {
+        self.factored_c_in = None;
+    }
+
     /// Newton matrices assembled and factored since the stepper was made.
     pub fn factorizations(&self) -> u64 {
         self.factorizations
@@ -501,6 +507,11 @@ impl Stepper {
     fn factor(&mut self, rod: &Rod, c_in: f64) -> Result<usize, NewtonFailure> {
         for j in 0..rod.ndof() {
             self.hess.add_diagonal(j, c_in * rod.mass[j]);
+        }
+        for spring in &rod.springs {
+            self.hess.add_diagonal(spring.dof, spring.stiffness);
+        }
+        for j in 0..rod.ndof() {
             if rod.fixed[j] {
                 self.hess.constrain(j);
             }
@@ -542,6 +553,11 @@ impl Stepper {
                 phi += 0.5 * c_in * m * (dq - target) * (dq - target) - self.ext[j] * rod.q[j];
             }
         }
+        for spring in &rod.springs {
+            let force = spring.force(&rod.q, spring.anchor_after(h));
+            self.resid[spring.dof] -= force;
+            phi += 0.5 * force * force / spring.stiffness;
+        }
         phi
     }
 }
@@ -578,4 +594,61 @@ fn force_norm(rod: &Rod, r: &[f64]) -> f64 {
         .enumerate()
         .filter(|(j, _)| !rod.fixed[*j] && j % 4 != 3)
         .fold(0.0, |m, (_, v)| m.max(v.abs()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::rod::{End, Spring, node_dof};
+
+    /// A straight rod clamped at its start, its far end free along the axis
+    /// on a spring whose anchor moves by D and stops: at rest the spring
+    /// carries D k k_r / (k + k_r), the axial stiffness k_r = EA / l of the
+    /// rod's free length l (the clamp holds its first edge) in series with the
+    /// spring's k.
+    #[test]
+    fn a_spring_in_series_with_the_rod_carries_the_series_force() {
+        let k = 21;
+        let points: Vec<Vector3<f64>> = (0..k).map(|i| Vector3::new(i as f64 / 20.0, 0.0, 0.0)).collect();
+        let mut rod = Rod::new(&points, 1e-3, Material::default()).unwrap();
+        rod.clamp(End::Start);
+        rod.clamp(End::Finish);
+        let far = node_dof(k - 1);
+        for d in [node_dof(k - 2), far] {
+            rod.fixed[d] = false;
+        }
+        let rod_stiffness = rod.section.ea / 0.95;
+        let stiffness = 2.0 * rod_stiffness;
+        let (distance, speed) = (1e-3, 1e-2);
+        rod.springs.push(Spring {
+            dof: far,
+            stiffness,
+            anchor: rod.q[far],
+            velocity: speed,
+        });
+        let env = Environment {
+            damping: 50.0,
+            ..Environment::default()
+        };
+        let mut stepper = Stepper::new(&rod, NewtonOptions::default());
+        let dt = 1e-3;
+        let moving = (distance / speed / dt).round() as usize;
+        for step in 0..moving + 4000 {
+            if step == moving {
+                rod.springs[0].velocity = 0.0;
+            }
+            stepper.step(&mut rod, &env, None, dt).unwrap();
+        }
+        let spring = rod.springs[0];
+        let force = spring.force(&rod.q, spring.anchor);
+        let series = distance * stiffness * rod_stiffness / (stiffness + rod_stiffness);
+        assert!((spring.anchor - 1.0 - distance).abs() < 1e-12);
+        assert!((force / series - 1.0).abs() < 1e-6, "{force} against {series}");
+        let start = -stepper.clamp_reaction(&rod, End::Start).0.x;
+        assert!(
+            (start / series - 1.0).abs() < 1e-6,
+            "the clamp holds what the spring pulls: {start}"
+        );
+    }
 }

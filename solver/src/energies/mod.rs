@@ -107,6 +107,29 @@ pub fn evaluate(rod: &Rod, terms: Terms, grad: &mut [f64], mut hess: Option<&mut
     out
 }
 
+/// The elastic energy attributed to the nodes `nodes` (J), by node: the
+/// bending and twisting energies of eq. (6) at each interior node in the
+/// range, and half the stretching energy of each edge per end node in it.
+/// Over `0..K` it is `evaluate`'s total; disjoint ranges add up.
+pub fn within(rod: &Rod, nodes: std::ops::Range<usize>) -> f64 {
+    let mut edge = Local::<7>::default();
+    let mut node = Local::<11>::default();
+    let mut total = 0.0;
+    for i in nodes.clone() {
+        for e in [i.wrapping_sub(1), i] {
+            if e < rod.edges() {
+                stretching::edge(rod, e, false, &mut edge);
+                total += 0.5 * edge.energy;
+            }
+        }
+        if i >= 1 && i + 1 < rod.nodes() {
+            node.energy = 0.0;
+            total += bending::node(rod, i, false, &mut node) + twisting::node(rod, i, false, &mut node);
+        }
+    }
+    total
+}
+
 fn add_local<const N: usize>(
     offset: usize,
     local: &Local<N>,
@@ -157,5 +180,40 @@ pub(crate) fn add_outer_lower<const N: usize>(hess: &mut SMatrix<f64, N, N>, w: 
         for r in c..N {
             hess[(r, c)] += wc * v[r];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use nalgebra::Vector3;
+
+    /// A bent, stretched and twisted rod: the energy by node over all nodes
+    /// is the total of eq. (6), and disjoint ranges add up.
+    #[test]
+    fn energies_by_node_add_up_to_the_total() {
+        let points: Vec<Vector3<f64>> = (0..40)
+            .map(|i| {
+                let s = i as f64 * 0.03;
+                Vector3::new(s, 0.1 * (3.0 * s).sin(), 0.05 * s * s)
+            })
+            .collect();
+        let mut rod = Rod::new(&points, 1e-3, Material::default()).unwrap();
+        rod.add_twist(0.7);
+        for (k, q) in rod.q.iter_mut().enumerate() {
+            *q *= 1.0 + 1e-3 * (k % 3) as f64;
+        }
+        rod.update_geometry();
+        let mut grad = vec![0.0; rod.ndof()];
+        let total = evaluate(&rod, Terms::ALL, &mut grad, None).total();
+        let k = rod.nodes();
+        let all = within(&rod, 0..k);
+        assert!(
+            total > 0.0 && (all - total).abs() <= 1e-12 * total,
+            "{all} against {total}"
+        );
+        let parts = within(&rod, 0..7) + within(&rod, 7..25) + within(&rod, 25..k);
+        assert!((parts - total).abs() <= 1e-12 * total);
     }
 }

@@ -16,4 +16,4 @@ pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
     knot_determinant,
 };
-pub use twist::{paper_twist, writhe};
+pub use twist::{paper_twist, writhe, writhe_change};

@@ -103,11 +103,39 @@ pub struct Rod {
     pub fixed: Vec<bool>,
     /// Prescribed velocity of each fixed DOF (zero for a still clamp).
     pub prescribed_velocity: Vec<f64>,
+    /// Linear springs tying free DOFs to moving anchors (a clamp on a load
+    /// cell); none by default.
+    pub springs: Vec<Spring>,
     /// Frames and strains at the current iterate.
     pub geo: Geometry,
     tangent_old: Vec<Vector3<f64>>,
     d1_old: Vec<Vector3<f64>>,
     ref_twist_old: Vec<f64>,
+}
+
+/// A linear spring of stiffness `stiffness` (N/m) between a free position
+/// DOF and an anchor moving at `velocity`: the energy
+/// `k (q_dof - anchor)^2 / 2`, its force and stiffness taken implicitly by
+/// the stepper.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Spring {
+    pub dof: usize,
+    pub stiffness: f64,
+    /// The anchor's position at the last accepted step (m) and its velocity (m/s).
+    pub anchor: f64,
+    pub velocity: f64,
+}
+
+impl Spring {
+    /// The anchor a step of length `h` ends at.
+    pub fn anchor_after(&self, h: f64) -> f64 {
+        self.anchor + h * self.velocity
+    }
+
+    /// The force on the DOF (N) with the anchor at `anchor`.
+    pub fn force(&self, q: &[f64], anchor: f64) -> f64 {
+        self.stiffness * (anchor - q[self.dof])
+    }
 }
 
 impl Rod {
@@ -180,6 +208,7 @@ impl Rod {
             voronoi,
             fixed: vec![false; ndof],
             prescribed_velocity: vec![0.0; ndof],
+            springs: Vec::new(),
             geo,
             tangent_old: tangent,
             d1_old,
@@ -352,6 +381,9 @@ impl Rod {
     pub fn accept_step(&mut self, dt: f64) {
         for ((v, q), q0) in self.velocity.iter_mut().zip(&self.q).zip(&self.q_old) {
             *v = (q - q0) / dt;
+        }
+        for spring in &mut self.springs {
+            spring.anchor = spring.anchor_after(dt);
         }
         self.q_old.copy_from_slice(&self.q);
         self.tangent_old.copy_from_slice(&self.geo.tangent);

@@ -115,7 +115,7 @@ fn table(name: &str) -> Result<Vec<Rod>> {
             }
             for u in ["1e-2", "3e-2"] {
                 rods.push(rod(
-                    &format!("adaptive pull forced fast, {u} m/s"),
+                    &format!("adaptive pull, {u} m/s, physical inertia"),
                     &format!("--n 3 --mass-scaling false --pull-speed {u}"),
                 ));
             }

@@ -2,6 +2,7 @@
 //! table [`PARAMETERS`] that documents and bounds them), their validation and
 //! the case to run ([`ValidCase`]), shared by the CLI, the API, the queue and
 //! the solver. SI units.
+mod loading;
 mod materials;
 mod params;
 mod partial;
@@ -11,6 +12,7 @@ mod table;
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{KnotSpec, StartShape};
 use crate::words::display_as_word;
+pub use loading::{Direction, Ends, LoadStage, Soft, Target, default_program};
 pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};

@@ -71,11 +71,29 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
                  one per line, comma or whitespace separated, extra columns ignored, `#` comments",
             );
     }
+    if p.range == Range::Program {
+        return arg
+            .value_name("JSON|FILE")
+            .help(p.description())
+            .value_parser(program);
+    }
     let kind = default.clone();
     let integer = matches!(p.range, Range::Integers(..));
     arg.help(p.description())
         .allow_negative_numbers(true)
         .value_parser(move |text: &str| parse(&kind, integer, text))
+}
+
+/// A loading program given inline as JSON, or the path of a file holding it.
+fn program(text: &str) -> Result<Value, String> {
+    let json = match std::fs::read_to_string(text) {
+        Ok(file) => file,
+        Err(_) if text.trim_start().starts_with('[') => text.to_string(),
+        Err(e) => return Err(format!("neither a JSON list nor a readable file: {e}")),
+    };
+    let value: Value = serde_json::from_str(&json).map_err(|e| format!("not JSON: {e}"))?;
+    serde_json::from_value::<Vec<solver::case::LoadStage>>(value.clone()).map_err(|e| e.to_string())?;
+    Ok(value)
 }
 
 /// A flag's text as a JSON value of the type of the parameter's default

@@ -181,6 +181,24 @@ fn stage_steps(report: &Value) -> String {
         .join(", ")
 }
 
+/// The rod's slack at the inversion without its stretch, (arc length -
+/// l_c) / h, from the snapshot at the inversion: l_k bar = (L - l_c) / h
+/// (eq. 11) also counts the rod's elastic elongation, strain F / EA = F bar / 4.
+fn slack(report: &Value) -> Option<f64> {
+    let h = report["params"]["h"].as_f64()?;
+    let shots = report
+        .get("snapshots")
+        .or_else(|| report.get("frames"))?
+        .as_array()?;
+    let at = shots.iter().find(|s| s["label"] == "at_inversion")?;
+    let points: Vec<[f64; 3]> = serde_json::from_value(at["points"].clone()).ok()?;
+    let dist = |a: &[f64; 3], b: &[f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let arc: f64 = points.windows(2).map(|w| dist(&w[0], &w[1])).sum();
+    Some((arc - dist(points.first()?, points.last()?)) / h)
+}
+
 /// One table row.
 fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
     let r = &m.report;
@@ -206,7 +224,7 @@ fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
     });
     let scaling = &r["scaling"];
     format!(
-        "| {} | {} | {} | {} | {:.2} | {:.1}x | {} | {} | {} | {} | {} |",
+        "| {} | {} | {} | {} | {:.2} | {:.1}x | {} | {} | {} | {} | {} | {} |",
         rod.label,
         r["status"].as_str().unwrap_or("?"),
         r["params"]["nodes"],
@@ -214,6 +232,7 @@ fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
         m.cpu,
         m.cpu / unit,
         l_k,
+        slack(r).map_or("-".to_string(), |s| format!("{s:.1}")),
         clean,
         ratio,
         scaling["mass_scale"]

@@ -109,7 +109,7 @@ impl ValidCase {
 /// The knots built so far in one validation pass, by spec, with the
 /// builder's refusal if it refused ([`CaseParams::validate_in`]).
 #[derive(Debug, Default)]
-pub struct BuildChecks(Vec<(KnotSpec, Option<ParamError>)>);
+pub struct BuildChecks(Vec<(KnotSpec, Result<f64, ParamError>)>);
 
 /// A parameter outside its documented range.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
@@ -144,19 +144,21 @@ impl CaseParams {
         if !errors.is_empty() {
             return Err(errors);
         }
-        if self.initial_shape.is_some() {
-            return self.start_shape().map(|_| ()).map_err(|e| vec![e]);
-        }
-        let spec = self.knot_spec();
-        let outcome = match checks.0.iter().find(|(s, _)| *s == spec) {
-            Some((_, outcome)) => outcome.clone(),
-            None => {
-                let outcome = self.start_shape().err();
-                checks.0.push((spec, outcome.clone()));
-                outcome
+        let start = if self.initial_shape.is_some() {
+            self.start_shape().map(|s| self.l_k_bar_of(&s))
+        } else {
+            let spec = self.knot_spec();
+            match checks.0.iter().find(|(s, _)| *s == spec) {
+                Some((_, outcome)) => outcome.clone(),
+                None => {
+                    let outcome = self.start_shape().map(|s| self.l_k_bar_of(&s));
+                    checks.0.push((spec, outcome.clone()));
+                    outcome
+                }
             }
         };
-        outcome.map_or(Ok(()), |e| Err(vec![e]))
+        let start = start.map_err(|e| vec![e])?;
+        self.loading_error(start).map_or(Ok(()), |e| Err(vec![e]))
     }
 
     /// The checks of [`CaseParams::validate`] and the start shape in one
@@ -167,6 +169,9 @@ impl CaseParams {
             return Err(errors);
         }
         let start = self.start_shape().map_err(|e| vec![e])?;
+        if let Some(e) = self.loading_error(self.l_k_bar_of(&start)) {
+            return Err(vec![e]);
+        }
         Ok(ValidCase {
             params: CaseParams {
                 nodes: Some(self.node_count()),
@@ -175,6 +180,29 @@ impl CaseParams {
             },
             start,
         })
+    }
+
+    /// l_k bar of a start shape (eq. 11).
+    fn l_k_bar_of(&self, start: &StartShape) -> f64 {
+        let span = start.points[start.points.len() - 1] - start.points[0];
+        (self.length - span.norm()) / self.h
+    }
+
+    /// Why the loading program cannot run from a knot starting at l_k bar
+    /// `start` ([`loading::check`]), if it cannot.
+    fn loading_error(&self, start: f64) -> Option<ParamError> {
+        let program = self.loading.as_deref()?;
+        loading::check(program, start, self.length / self.h)
+            .err()
+            .map(|reason| ParamError {
+                field: "loading".to_string(),
+                reason,
+            })
+    }
+
+    /// The loading program: `loading`, or one tightening.
+    pub fn program(&self) -> Vec<LoadStage> {
+        self.loading.clone().unwrap_or_else(default_program)
     }
 
     /// Every range of [`PARAMETERS`] that does not hold, in the table's order.

@@ -1,7 +1,9 @@
 //! `CaseParams` and its table, [`PARAMETERS`]: each parameter's unit,
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
-use super::{Candidates, ContactSolve, FrictionLaw, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol};
+use super::{
+    Candidates, ContactSolve, FrictionLaw, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol,
+};
 use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
 use serde::{Deserialize, Serialize};
 
@@ -70,6 +72,8 @@ pub struct CaseParams {
     pub max_force_bar: Option<f64>,
     /// The user's start shape (m), checked by [`crate::knot::checked_start`].
     pub initial_shape: Option<Vec<[f64; 3]>>,
+    /// The loading program; `None`: one tightening ([`super::default_program`]).
+    pub loading: Option<Vec<LoadStage>>,
 }
 
 impl Default for CaseParams {
@@ -105,6 +109,7 @@ impl Default for CaseParams {
             stop_after_inversion: Some(10.0),
             max_force_bar: None,
             initial_shape: None,
+            loading: None,
         }
     }
 }
@@ -508,6 +513,26 @@ pub const PARAMETERS: &[Parameter] = &[
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
               points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass \
               overhand knot. Mind the body limit (64 KiB by default: about 700 points).",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "loading",
+        group: Group::Loading,
+        unit: "",
+        default: "null",
+        range: Range::Program,
+        null: Some("one tightening: [{\"pull\": {}}], to the stopping rules"),
+        paper: "null",
+        doc: "The loading program: the stages the clamps go through after the knot has relaxed, in order, each an \
+              object with one key. {\"pull\": {\"to_l_k_bar\": X}} tightens at pull_speed to X (null X: to the \
+              stopping rules min_l_k_bar, stop_after_inversion and max_force_bar); {\"release\": {\"to_l_k_bar\": X}} \
+              loosens at pull_speed to X (null X: back to where the program started); {\"hold\": {\"seconds\": T}} \
+              holds the clamps still; {\"rotate\": {\"turns\": N, \"ends\": \"one\" or \"both\"}} turns the finish \
+              clamp (or both, in opposite senses) by N turns in all about the pull axis, right-handed from the start \
+              clamp to the finish clamp; {\"soft\": {\"stiffness_bar\": k, \"to_l_k_bar\": X}} moves the grips at \
+              pull_speed with the clamps on springs of stiffness k h^3 / EI along the pull, to the knot's l_k bar X. \
+              protocol = \"adaptive\" runs pulls and releases fast far from events. Events (inversions, flips back) \
+              are detected in every stage (docs/API.md, \"Loading programs\").",
         value: UNCHECKED,
     },
 ];

@@ -86,6 +86,9 @@ pub enum Range {
     /// K = `nodes` points `[x, y, z]`, checked as a start shape
     /// ([`crate::knot::checked_start`]).
     Points,
+    /// A loading program ([`super::LoadStage`]), checked against the start
+    /// shape.
+    Program,
 }
 
 /// One end of an interval.
@@ -121,6 +124,10 @@ impl Parameter {
                 .collect::<Vec<_>>()
                 .join(" or "),
             Range::Points => "K = nodes points [x, y, z]".to_string(),
+            Range::Program => format!(
+                "a list of at most {} stages, each {{\"pull\" | \"release\" | \"hold\" | \"rotate\" | \"soft\": {{...}}}}",
+                super::loading::MAX_STAGES
+            ),
         };
         match self.null {
             Some(_) => format!("null or {values}"),

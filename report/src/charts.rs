@@ -15,13 +15,20 @@ pub enum Quantity {
 }
 
 impl Quantity {
-    /// From a figure's file stem (`f_bar`, `h_bar`).
-    pub fn parse(stem: &str) -> Option<Self> {
-        match stem {
-            "f_bar" => Some(Self::FBar),
-            "h_bar" => Some(Self::HBar),
-            _ => None,
+    /// Both, in the order figures list them.
+    pub const ALL: [Self; 2] = [Self::FBar, Self::HBar];
+
+    /// The figure's file stem: the paper's symbol, as in the series' names.
+    pub fn stem(self) -> &'static str {
+        match self {
+            Self::FBar => "F_bar",
+            Self::HBar => "H_bar",
         }
+    }
+
+    /// From a figure's file stem ([`Quantity::stem`]).
+    pub fn parse(stem: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|q| q.stem() == stem)
     }
 
     pub fn axis_label(self) -> &'static str {
@@ -247,7 +254,10 @@ pub fn phase_chart(
                         .map(|m| Circle::new((m.x, m.l_k_bar), 9, red)),
                 )
                 .map_err(|e| anyhow!("{e}"))?
-                .label("unconverged (uncertainty above 2 %)")
+                .label(format!(
+                    "unconverged (uncertainty above {} %)",
+                    100.0 * solver::certify::CONVERGED_WITHIN
+                ))
                 .legend(move |(x, y)| Circle::new((x + 9, y), 7, red));
         }
         if !simplified.is_empty() {

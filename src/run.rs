@@ -111,7 +111,7 @@ impl ParamFlags {
 
 /// Points `x y z` from text: one per line, comma or whitespace separated,
 /// extra columns ignored, blank lines and `#` comments skipped.
-fn read_points(text: &str) -> Result<Vec<[f64; 3]>> {
+pub(crate) fn read_points(text: &str) -> Result<Vec<[f64; 3]>> {
     let mut points = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();

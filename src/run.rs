@@ -156,7 +156,7 @@ mod tests {
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    params: ParamFlags,
+    pub(crate) params: ParamFlags,
     /// Write the JSON report here.
     #[arg(long, default_value = "case.json")]
     out: PathBuf,

@@ -125,11 +125,11 @@ const CONVERGED: f64 = 0.03;
 /// The n sweep: the Fig. 9 cases.
 const N_KEYS: [&str; 4] = ["n2", "n3", "n4", "n5"];
 
-/// One check of the table: what is checked, how to rerun it, what came out
-/// and whether it passes.
+/// One check of the table: what is checked, how to rerun it (code spans),
+/// what came out and whether it passes.
 struct Check {
     what: String,
-    command: String,
+    commands: String,
     figure: String,
     pass: bool,
 }
@@ -228,7 +228,7 @@ fn fig1_checks(get: &Lookup) -> Result<Vec<Check>> {
                     "n = {}, h = 1.6 mm: inversion at l_k bar in [{lo}, {hi}] (paper Fig. 1: {fig})",
                     j.params.n
                 ),
-                command: commands([j]),
+                commands: commands([j]),
                 figure: describe(r),
                 pass: inversion(r).is_some_and(|l| (lo..=hi).contains(&l)),
             })
@@ -240,7 +240,7 @@ fn n1_check(get: &Lookup) -> Result<Check> {
     let (j, r) = case(get, "n1")?;
     Ok(Check {
         what: "n = 1: no inversion".into(),
-        command: commands([j]),
+        commands: commands([j]),
         figure: describe(r),
         pass: r.status == Status::Completed && r.inversion.is_none(),
     })
@@ -252,7 +252,7 @@ fn growth_check(get: &Lookup) -> Result<Check> {
     let ns: Vec<Option<f64>> = cases.iter().map(|(_, r)| inversion(r)).collect();
     Ok(Check {
         what: "n = 2 ... 5 at h = 1.6 mm: critical l_k bar grows with n (paper Fig. 9)".into(),
-        command: commands(cases.iter().map(|(j, _)| *j)),
+        commands: commands(cases.iter().map(|(j, _)| *j)),
         figure: (cases.iter())
             .map(|(j, r)| format!("n{}: {}", j.params.n, describe(r)))
             .collect::<Vec<_>>()
@@ -273,7 +273,7 @@ fn braid_check(get: &Lookup) -> Result<Check> {
             "n = 2 ... 5: the braid before the snap has epsilon = l_b / l_l and phi near the paper's {PAPER_EPSILON} and pi/3 (within {} %, Sec. 5)",
             100.0 * BRAID_TOLERANCE
         ),
-        command: format!(
+        commands: format!(
             "{} (series columns epsilon, phi)",
             commands(cases.iter().map(|(j, _)| *j))
         ),
@@ -313,7 +313,7 @@ fn fig7_check(get: &Lookup, keys: &[String]) -> Result<Check> {
             "n = 3, h = 1.6 ... 3.2 mm: critical l_k bar nearly the same (spread <= {} %)",
             100.0 * H_SPREAD
         ),
-        command: "knotsweep sweep --preset fig7 --set protocol=reference".into(),
+        commands: "`knotsweep sweep --preset fig7 --set protocol=reference`".into(),
         figure,
         pass,
     })
@@ -332,7 +332,7 @@ fn fig11_check(get: &Lookup, keys: &[String]) -> Result<Check> {
         && mus.last().copied().flatten() >= mus[0].map(|x| 1.1 * x);
     Ok(Check {
         what: "n = 3, h = 3.4 mm, mu = 0.1 ... 0.7: critical l_k bar grows with mu (never falls by more than 2 % from one mu to the next, mu = 0.7 at least 10 % above mu = 0.1) with F bar falling through every snap (paper Fig. 11)".into(),
-        command: "knotsweep sweep --preset fig11 --set protocol=reference".into(),
+        commands: "`knotsweep sweep --preset fig11 --set protocol=reference`".into(),
         figure: (mus.iter())
             .map(|m| m.map_or("-".to_string(), |x| format!("{x:.1}")))
             .collect::<Vec<_>>()
@@ -370,7 +370,7 @@ fn convergence_checks(get: &Lookup) -> Result<Vec<Check>> {
                     j.params.pull_speed * 1e3,
                     100.0 * CONVERGED
                 ),
-                command: commands([j]),
+                commands: commands([j]),
                 figure: format!(
                     "{} ; change {}",
                     describe(r),
@@ -388,7 +388,7 @@ fn checks_section(checks: &[Check]) -> String {
     let rows = checks.iter().map(|c| {
         [
             c.what.clone(),
-            format!("`{}`", c.command.trim_matches('`')),
+            c.commands.clone(),
             c.figure.clone(),
             if c.pass { "yes" } else { "**no**" }.to_string(),
         ]

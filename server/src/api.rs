@@ -280,14 +280,14 @@ async fn get_limits(State(app): State<App>) -> Json<ServiceLimits> {
 /// Submit a sweep: a base case plus a grid, or a preset.
 ///
 /// Every case parameter is optional (paper defaults); `grid` lists values for
-/// any parameters (cartesian product, at most 1000 cases by default). A case
+/// any parameters (cartesian product, at most `max_cases` of `GET /api/limits`). A case
 /// already computed (same parameters and solver version) is reused at once
 /// (`cached: true`). With an `Idempotency-Key` seen before and the same body,
 /// the first sweep is returned (200, `replayed: true`); with a different body,
 /// 409.
 #[utoipa::path(post, path = "/api/sweeps", tag = "sweeps",
-    request_body(content = SweepSpec, description = "At most 64 KiB (default limit)"),
-    params(("Idempotency-Key" = Option<String>, Header, description = "Makes retried submissions return the first sweep (1-200 printable ASCII characters)")),
+    request_body(content = SweepSpec, description = "At most `max_body_bytes` of `GET /api/limits`"),
+    params(("Idempotency-Key" = Option<String>, Header, description = "Makes retried submissions return the first sweep (printable ASCII, at most `max_idempotency_key_chars` of `GET /api/limits`)")),
     responses(
         (status = 201, description = "Accepted", body = SubmitResponse),
         (status = 200, description = "Idempotent replay of an earlier submission", body = SubmitResponse),

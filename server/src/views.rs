@@ -574,7 +574,7 @@ pub struct UncertaintyView {
     pub absolute: Option<f64>,
     /// `absolute` over the point's l_k bar.
     pub relative: Option<f64>,
-    /// `relative` <= 2 % (`solver::certify::CONVERGED_WITHIN`); false when
+    /// `relative` at most `converged_within` (`GET /api/limits`); false when
     /// only one of the two inverted; null until both have a result.
     pub converged: Option<bool>,
 }

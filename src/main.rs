@@ -1,5 +1,7 @@
 //! `knotsweep`: one command for everything — validation suite, single cases,
 //! sweeps and the service (subcommands are added as the features land).
+#[cfg(test)]
+mod doc_commands;
 mod queue_args;
 mod reproduce;
 mod run;

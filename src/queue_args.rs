@@ -14,8 +14,8 @@ pub struct QueueArgs {
     /// Cases are CPU-bound: more workers than cores only share the cores.
     #[arg(long, visible_alias = "threads", value_parser = parse_workers)]
     pub workers: Option<usize>,
-    /// Lease length (s); workers heartbeat every third of it.
-    #[arg(long, default_value_t = 30.0)]
+    /// Lease length (s); workers heartbeat several times within it.
+    #[arg(long, default_value_t = knotsweep_worker::pool::DEFAULT_LEASE.as_secs_f64())]
     pub lease_seconds: f64,
 }
 

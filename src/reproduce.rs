@@ -1,12 +1,14 @@
 //! `knotsweep reproduce`: reruns the paper's Sec. 4 checks with the full model
 //! and writes `docs/VALIDATION.md` (a table of command, figure and pass/fail)
-//! with SVG curves of F bar and H bar for the n sweep (paper Fig. 8 a, b).
+//! with SVG curves of F bar and H bar for the n sweep (paper Fig. 8 a, b) and
+//! the perturbation study's start shapes, the files its commands name.
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use report::validation::{Job, PERTURBATION};
 use solver::case::{Candidates, CaseParams, FrictionLaw, Protocol};
 use solver::protocol::{self, CaseReport};
+use std::path::Path;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -14,7 +16,7 @@ pub struct Args {
     /// Markdown report to write.
     #[arg(long, default_value = "docs/VALIDATION.md")]
     out: PathBuf,
-    /// Directory for the SVG figures.
+    /// Directory for the SVG figures (and, under `starts/`, the perturbed start shapes).
     #[arg(long, default_value = "docs/validation")]
     figures: PathBuf,
     /// Also write each case's full JSON report into this directory.
@@ -40,13 +42,14 @@ fn job(key: &str, f: impl FnOnce(&mut CaseParams)) -> Job {
     Job {
         key: key.to_string(),
         params,
-        start: None,
+        shape_file: None,
     }
 }
 
 /// The built knot for `n` with every node but the two clamped at each end moved
-/// by a random vector of length at most `PERTURBATION` h (seeded, uniform in the ball).
-fn perturbed(key: &'static str, n: u32, seed: u64) -> Result<Job> {
+/// by a random vector of length at most `PERTURBATION` h (seeded, uniform in the
+/// ball), to start from the file `starts/{key}.txt` of `figures`.
+fn perturbed(key: &'static str, n: u32, seed: u64, figures: &Path) -> Result<Job> {
     let mut params = CaseParams { n, ..base() };
     let shape = solver::knot::build(&params.knot_spec())?;
     let mut rng = solver::validation::rng::SplitMix64::new(seed);
@@ -66,16 +69,38 @@ fn perturbed(key: &'static str, n: u32, seed: u64) -> Result<Job> {
         })
         .collect();
     params.initial_shape = Some(points);
+    let file = figures.join("starts").join(format!("{key}.txt"));
     Ok(Job {
         key: key.to_string(),
         params,
-        start: Some(format!(
-            "built knot, nodes moved by up to {PERTURBATION} h (seed {seed})"
-        )),
+        shape_file: Some(file.display().to_string()),
     })
 }
 
-fn jobs() -> Result<Vec<Job>> {
+/// Writes each job's start shape to its file, as `--initial-shape` reads it
+/// (`x y z` per line, every digit kept: the run from the file is the run here).
+fn write_shapes(jobs: &[Job]) -> Result<()> {
+    for j in jobs {
+        let (Some(file), Some(points)) = (&j.shape_file, &j.params.initial_shape) else {
+            continue;
+        };
+        let path = Path::new(file);
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        let mut text = format!(
+            "# {}: the built n = {} knot, nodes moved by up to {PERTURBATION} h; x y z (m) per node\n",
+            j.key, j.params.n
+        );
+        for p in points {
+            text.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+        }
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn jobs(figures: &Path) -> Result<Vec<Job>> {
     let mut v = vec![
         job("n3", |_| {}),
         job("n1", |p| p.n = 1),
@@ -138,7 +163,7 @@ fn jobs() -> Result<Vec<Job>> {
         ("n4_seed2", 4, 2),
         ("n4_seed3", 4, 3),
     ] {
-        v.push(perturbed(key, n, seed)?);
+        v.push(perturbed(key, n, seed, figures)?);
     }
     // The service's presets of Figs 7 and 11 (Fig. 9's are the n jobs above).
     for j in preset_jobs("fig7")?.into_iter().chain(preset_jobs("fig11")?) {
@@ -182,7 +207,7 @@ fn preset_jobs(name: &str) -> Result<Vec<Job>> {
             jobs.push(Job {
                 key,
                 params,
-                start: None,
+                shape_file: None,
             });
         }
     }
@@ -190,8 +215,9 @@ fn preset_jobs(name: &str) -> Result<Vec<Job>> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let jobs = jobs()?;
+    let jobs = jobs(&args.figures)?;
     std::fs::create_dir_all(&args.figures).with_context(|| format!("creating {}", args.figures.display()))?;
+    write_shapes(&jobs)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()?;
@@ -257,7 +283,7 @@ mod tests {
     #[test]
     fn perturbed_starts_are_valid_cases() {
         for n in [3, 4] {
-            let j = perturbed("t", n, 1).unwrap();
+            let j = perturbed("t", n, 1, Path::new("starts")).unwrap();
             if let Err(errors) = j.params.validate() {
                 panic!("n = {n}: {errors:?}");
             }
@@ -271,5 +297,19 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!(largest > 0.0 && largest <= PERTURBATION * j.params.h);
         }
+    }
+
+    /// A start shape read back from its file is the shape the case ran from,
+    /// to the last bit: the documented command reruns the documented case.
+    #[test]
+    fn start_shapes_read_back_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        let j = perturbed("n3_seed1", 3, 1, dir.path()).unwrap();
+        write_shapes(std::slice::from_ref(&j)).unwrap();
+        let text = std::fs::read_to_string(j.shape_file.as_ref().unwrap()).unwrap();
+        assert_eq!(
+            crate::run::read_points(&text).unwrap(),
+            j.params.initial_shape.unwrap()
+        );
     }
 }

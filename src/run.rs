@@ -135,7 +135,7 @@ impl ParamFlags {
 
 /// Points `x y z` from text: one per line, comma or whitespace separated,
 /// extra columns ignored, blank lines and `#` comments skipped.
-fn read_points(text: &str) -> Result<Vec<[f64; 3]>> {
+pub(crate) fn read_points(text: &str) -> Result<Vec<[f64; 3]>> {
     let mut points = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let line = line.split('#').next().unwrap_or("").trim();
@@ -180,7 +180,7 @@ mod tests {
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    params: ParamFlags,
+    pub(crate) params: ParamFlags,
     /// Write the JSON report here.
     #[arg(long, default_value = "case.json")]
     out: PathBuf,
@@ -190,14 +190,21 @@ pub struct Args {
     /// Write SVG plots of F bar and H bar against l_k bar (paper Fig. 5 a, b) into this directory.
     #[arg(long)]
     plot: Option<PathBuf>,
-    /// Write the frames for ParaView into this directory: <out's stem>.pvd over one .vtp per frame and part
+    /// Write the snapshots for ParaView into this directory: <out's stem>.pvd over one .vtp per snapshot and part
     /// (centre line, contacts); docs/PARAVIEW.md.
     #[arg(long, value_name = "DIR")]
     vtk: Option<PathBuf>,
-    /// Also run the refined twin (time step halved) on another core and report the inversion's numerical
-    /// uncertainty, |refined - default| (the report's `uncertainty`; flagged above 2 %).
-    #[arg(long)]
+    #[arg(long, help = certify_help())]
     certify: bool,
+}
+
+/// `--certify`'s help, with the threshold of `solver::certify`.
+fn certify_help() -> String {
+    format!(
+        "Also run the refined twin (time step halved) on another core and report the inversion's numerical \
+         uncertainty, |refined - default| (the report's `uncertainty`; flagged unconverged above {} %)",
+        100.0 * solver::certify::CONVERGED_WITHIN
+    )
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -264,18 +271,18 @@ pub fn validated(params: &CaseParams) -> Result<ValidCase> {
 fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let inversion = report.inversion.map(|i| i.l_k_bar);
-    for (file, quantity) in [("F_bar.svg", Quantity::FBar), ("H_bar.svg", Quantity::HBar)] {
+    for quantity in Quantity::ALL {
         let svg = case_chart(&report.params, &report.series, inversion, quantity)?;
-        let path = dir.join(file);
+        let path = dir.join(format!("{}.svg", quantity.stem()));
         std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }
 
-/// The frames as ParaView files under `dir`: `{name}.pvd` and `{name}/*.vtp`.
+/// The snapshots as ParaView files under `dir`: `{name}.pvd` and `{name}/*.vtp`.
 fn write_vtk(report: &CaseReport, name: &str, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir.join(name)).with_context(|| format!("creating {}", dir.display()))?;
-    for file in report::vtk::case_files(name, report.params.h, &report.frames) {
+    for file in report::vtk::case_files(name, report.params.h, &report.snapshots) {
         let path = dir.join(&file.path);
         std::fs::write(&path, file.text).with_context(|| format!("writing {}", path.display()))?;
     }
@@ -283,6 +290,10 @@ fn write_vtk(report: &CaseReport, name: &str, dir: &std::path::Path) -> Result<(
 }
 
 fn summarise_uncertainty(u: &Uncertainty, twin: &CaseReport) {
+    let unconverged = format!(
+        ": UNCONVERGED (above {} %)",
+        100.0 * solver::certify::CONVERGED_WITHIN
+    );
     let refined = u
         .refined_l_k_bar
         .map_or("none".to_string(), |l| format!("{l:.2}"));
@@ -294,7 +305,7 @@ fn summarise_uncertainty(u: &Uncertainty, twin: &CaseReport) {
             if u.converged == Some(true) {
                 ""
             } else {
-                ": UNCONVERGED (above 2 %)"
+                &unconverged
             }
         ),
         _ => println!(

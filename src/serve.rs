@@ -13,13 +13,13 @@ pub struct Args {
     #[arg(long, default_value = DEFAULT_ADDR)]
     addr: String,
     /// Claims of a case before it is marked failed (lost workers, panics).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = RetryPolicy::DEFAULT.max_attempts)]
     max_attempts: u32,
     /// Largest number of cases per sweep.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = Limits::DEFAULT.max_cases)]
     max_cases: usize,
     /// Largest request body (bytes).
-    #[arg(long, default_value_t = 64 * 1024)]
+    #[arg(long, default_value_t = Limits::DEFAULT.max_body_bytes)]
     max_body_bytes: usize,
 }
 
@@ -42,12 +42,12 @@ pub fn run(args: Args) -> Result<()> {
             lease: Duration::from_secs_f64(args.queue.lease_seconds.max(0.1)),
             retry: RetryPolicy {
                 max_attempts: args.max_attempts.max(1),
-                ..RetryPolicy::default()
+                ..RetryPolicy::DEFAULT
             },
             limits: Limits {
                 max_cases: args.max_cases,
                 max_body_bytes: args.max_body_bytes,
-                ..Limits::default()
+                ..Limits::DEFAULT
             },
             token: token.clone(),
             ..ServerConfig::default()

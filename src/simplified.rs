@@ -110,7 +110,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             write(&a.out, &serde_json::to_string_pretty(&l)?)?;
             if let Some(p) = &a.svg {
-                write(p, &report::simplified::landscape(&l))?;
+                write(p, &report::simplified::landscape(&l)?)?;
             }
         }
         Command::Bifurcation(a) => {
@@ -124,11 +124,11 @@ pub fn run(args: Args) -> Result<()> {
             }
             write(&a.out, &serde_json::to_string_pretty(&b)?)?;
             if let Some(p) = &a.svg {
-                write(p, &report::simplified::bifurcation(&b, &[]))?;
+                write(p, &report::simplified::bifurcation(&b, &[])?)?;
             }
         }
         Command::Doc(a) => {
-            let doc = simplified::reproduce(&ReproductionSpec::default())?.document();
+            let doc = simplified::reproduce(&ReproductionSpec::default())?.document()?;
             std::fs::create_dir_all(&a.figures)
                 .with_context(|| format!("creating {}", a.figures.display()))?;
             for f in &doc.figures {

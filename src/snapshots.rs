@@ -9,7 +9,7 @@ use std::path::PathBuf;
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    params: crate::run::ParamFlags,
+    pub(crate) params: crate::run::ParamFlags,
     /// Clamp-to-clamp distances l_c / L at which to draw the knot, ascending
     /// (the first sample at or past each is drawn).
     #[arg(long, value_delimiter = ',', required = true)]

@@ -28,7 +28,7 @@ pub struct Args {
     /// Sets a base parameter, e.g. `--set nodes=161` (value as JSON); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
-    /// Phase-diagram JSON output [default: <preset or spec file name>.json].
+    /// Phase-diagram JSON output [default: PRESET.json for --preset, SPEC-phase-diagram.json for --spec SPEC.json].
     #[arg(long)]
     out: Option<PathBuf>,
     /// Certify every point: also run each case's refined twin (time step

@@ -16,7 +16,7 @@ pub struct Args {
     queue: crate::queue_args::QueueArgs,
     /// Idle poll interval (ms; on PostgreSQL, idle workers wake on notifications
     /// and poll every 5 s).
-    #[arg(long, default_value_t = 250)]
+    #[arg(long, default_value_t = knotsweep_worker::pool::DEFAULT_POLL.as_millis() as u64)]
     poll_ms: u64,
     /// Exit once no case has run for this many seconds (batch jobs: a Slurm
     /// array task ends when the queue is drained).

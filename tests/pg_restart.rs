@@ -4,8 +4,11 @@
 //! started again; the sweep completes with no case lost and none run twice.
 //! The workers claim, heartbeat and store synthetic results through the
 //! `Store` trait, as in `store_conformance.rs` (the solver is not the
-//! subject). Skipped, with the reason printed, where the server binaries are
-//! not installed.
+//! subject). Where the server binaries are not installed it is skipped with
+//! the reason, or fails when `CI` is set (`common::missing`).
+mod common;
+
+use common::missing;
 use knotsweep_worker::store::{
     CaseState, Claim, CreateOutcome, Heartbeat, NewCase, NewSweep, Store, StoreOptions, open_store,
 };
@@ -309,10 +312,7 @@ async fn compute(store: &dyn Store, claim: Claim, seen: &Seen) {
 async fn a_sigkilled_postgres_loses_no_case_and_runs_none_twice() {
     let server = match Server::init() {
         Ok(s) => s,
-        Err(why) => {
-            println!("skipped: {why}");
-            return;
-        }
+        Err(why) => return missing(&why),
     };
     // Orphans of the server come to this process, which reaps them.
     // SAFETY: prctl with an integer argument.

@@ -1,8 +1,8 @@
 //! Beyond one machine (docs/scale-out.md): the compose file, the Slurm recipe
 //! on a real single-node cluster, and workers in separate network namespaces
-//! sharing PostgreSQL over a link that is cut mid-case. Each test prints why
-//! it is skipped where its engine (docker-compose, sbatch, PostgreSQL, `ip
-//! netns`) is missing.
+//! sharing PostgreSQL over a link that is cut mid-case. Where its engine
+//! (docker-compose, sbatch, PostgreSQL, `ip netns`) is missing, each test is
+//! skipped with the reason, or fails when `CI` is set (`common::missing`).
 mod common;
 
 use common::*;
@@ -33,8 +33,7 @@ impl Drop for Killed {
 #[test]
 fn the_compose_file_is_valid_and_runs_postgres_a_server_and_scalable_workers() {
     if !installed("docker-compose") {
-        println!("skipped: docker-compose is not installed (apt-get install docker-compose)");
-        return;
+        return missing("docker-compose is not installed (apt-get install docker-compose)");
     }
     let root = env!("CARGO_MANIFEST_DIR");
     let out = Command::new("docker-compose")
@@ -60,22 +59,17 @@ fn the_compose_file_is_valid_and_runs_postgres_a_server_and_scalable_workers() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_slurm_job_array_of_workers_drains_a_postgres_sweep() {
     if !installed("sbatch") {
-        println!(
-            "skipped: sbatch is not installed (slurm-wlm; deploy/slurm/local-cluster.sh starts a local cluster)"
+        return missing(
+            "sbatch is not installed (slurm-wlm; deploy/slurm/local-cluster.sh starts a local cluster)",
         );
-        return;
     }
     let idle = Command::new("sinfo").args(["-h", "-o", "%T"]).output();
     if !idle.is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("idle")) {
-        println!("skipped: no idle Slurm node (run deploy/slurm/local-cluster.sh as root)");
-        return;
+        return missing("no idle Slurm node (run deploy/slurm/local-cluster.sh as root)");
     }
     let (db_url, admin, db) = match fresh_postgres("slurm").await {
         Ok(v) => v,
-        Err(why) => {
-            println!("skipped: {why}");
-            return;
-        }
+        Err(why) => return missing(&why),
     };
     let server = start(config(&db_url, 0)).await;
     let (url, c) = (server.url(), client());
@@ -228,17 +222,11 @@ async fn relay(listen: &str, target: String) -> String {
 async fn a_worker_cut_off_mid_case_loses_the_case_to_another_which_completes_it_once() {
     let ns = match Namespace::create() {
         Ok(ns) => ns,
-        Err(why) => {
-            println!("skipped: cannot create a network namespace ({why})");
-            return;
-        }
+        Err(why) => return missing(&format!("cannot create a network namespace ({why})")),
     };
     let (db_url, admin, db) = match fresh_postgres("netns").await {
         Ok(v) => v,
-        Err(why) => {
-            println!("skipped: {why}");
-            return;
-        }
+        Err(why) => return missing(&why),
     };
     let pg = test_postgres();
     let hostport = pg

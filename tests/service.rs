@@ -127,7 +127,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         assert!(reason.contains("no inversion"), "{reason}");
     }
 
-    // A completed case: parameters, result, series, CSV, frames, logs.
+    // A completed case: parameters, result, series, CSV, snapshots, logs.
     let case_id = sweep["cases"][0]["case_id"].as_i64().unwrap();
     let (status, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
     assert_eq!(status, StatusCode::OK);
@@ -155,11 +155,11 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     assert_eq!(status, StatusCode::OK);
     assert!(csv.starts_with("time,l_k_bar,l_c_over_L,F,F_bar,"));
     assert_eq!(csv.lines().count(), series.len() + 1);
-    let (status, frames) = get(&c, &format!("{url}/api/cases/{case_id}/frames")).await;
+    let (status, snapshots) = get(&c, &format!("{url}/api/cases/{case_id}/snapshots")).await;
     assert_eq!(status, StatusCode::OK);
-    assert_eq!(frames[0]["points"].as_array().unwrap().len(), 121);
+    assert_eq!(snapshots[0]["points"].as_array().unwrap().len(), 121);
     // Its figures: the charts `knotsweep run --plot` writes, drawn from the stored series.
-    let (status, svg) = get_text(&c, &format!("{url}/api/cases/{case_id}/figures/f_bar.svg")).await;
+    let (status, svg) = get_text(&c, &format!("{url}/api/cases/{case_id}/figures/F_bar.svg")).await;
     assert_eq!(status, StatusCode::OK);
     let samples: Vec<solver::measurements::Sample> = serde_json::from_value(case["series"].clone()).unwrap();
     let p = &case["params"];
@@ -180,7 +180,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     )
     .unwrap();
     assert_eq!(svg, expected);
-    let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/h_bar.svg")).await;
+    let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/H_bar.svg")).await;
     assert_eq!(status, StatusCode::OK);
     assert!(
         svg.starts_with("<svg") && svg.contains("mu = 0.1"),
@@ -927,7 +927,7 @@ async fn bad_input_gets_a_4xx_with_the_field_and_the_reason() {
         ("/api/sweeps/999/events", StatusCode::NOT_FOUND),
         ("/api/cases/999", StatusCode::NOT_FOUND),
         ("/api/cases/999/series.csv", StatusCode::NOT_FOUND),
-        ("/api/cases/999/frames", StatusCode::NOT_FOUND),
+        ("/api/cases/999/snapshots", StatusCode::NOT_FOUND),
         ("/api/nothing", StatusCode::NOT_FOUND),
     ] {
         let (status, error) = get(&c, &format!("{url}{path}")).await;
@@ -1125,6 +1125,67 @@ async fn a_certified_sweep_runs_a_refined_twin_per_point_and_reports_its_uncerta
             .iter()
             .all(|p| p["uncertainty"].is_null())
     );
+    server.shutdown().await.unwrap();
+}
+
+/// The twin relation is stored at submission: after a physics revision bump
+/// (every stored key rewritten to the next revision's) each point still
+/// finds its twin; a sweep stored before the relation was finds them by
+/// their parameters.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_certified_sweep_keeps_its_twins_across_a_physics_revision() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let spec = json!({"base": tiny_base(), "grid": {"mu": [0.1, 0.2, 0.3]}, "certify": true});
+    let id = submit_sweep(&c, &url, &spec).await;
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
+    let twin_of = |cases: &Value| -> Vec<(i64, i64)> {
+        let mut pairs: Vec<(i64, i64)> = (cases.as_array().unwrap().iter())
+            .filter_map(|c| Some((c["twin_of"].as_i64()?, c["case_id"].as_i64()?)))
+            .collect();
+        pairs.sort();
+        pairs
+    };
+    let submitted = twin_of(&cases);
+    assert_eq!(submitted.len(), 3, "{cases:#}");
+
+    let store = SqliteStore::connect(&db, SqliteOptions::default()).await.unwrap();
+    let next = solver::case::PHYSICS_REVISION + 1;
+    for case in cases.as_array().unwrap() {
+        let id = case["case_id"].as_i64().unwrap();
+        let params = store.get_case(id).await.unwrap().unwrap().params;
+        sqlx::query("UPDATE cases SET case_key = $1 WHERE id = $2")
+            .bind(knotsweep_worker::key::case_key_under(&params, next))
+            .bind(id)
+            .execute(store.pool())
+            .await
+            .unwrap();
+    }
+    let found = |diagram: &Value| -> Vec<(i64, i64)> {
+        let mut pairs: Vec<(i64, i64)> = (diagram["points"].as_array().unwrap().iter())
+            .filter_map(|p| {
+                Some((
+                    p["case_id"].as_i64()?,
+                    p["uncertainty"]["refined_case_id"].as_i64()?,
+                ))
+            })
+            .collect();
+        pairs.sort();
+        pairs
+    };
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(found(&diagram), submitted, "{diagram:#}");
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
+    assert_eq!(twin_of(&cases), submitted);
+
+    sqlx::query("UPDATE sweep_cases SET twin_position = NULL")
+        .execute(store.pool())
+        .await
+        .unwrap();
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(found(&diagram), submitted, "found by parameters: {diagram:#}");
+    store.close().await;
     server.shutdown().await.unwrap();
 }
 

@@ -1,10 +1,11 @@
 //! One conformance suite for the `Store` trait, run against every backend:
 //! SQLite (a temporary file) and PostgreSQL (a fresh database on the server
 //! at `KNOTSWEEP_TEST_POSTGRES`, default `postgres://postgres@127.0.0.1:5432/test`;
-//! skipped with a printed reason when that server does not answer).
+//! when that server does not answer, skipped with the reason, or failing when
+//! `CI` is set: `common::missing`).
 mod common;
 
-use common::{drop_database, fresh_postgres};
+use common::{drop_database, fresh_postgres, missing};
 use knotsweep_worker::store::{
     CaseState, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep, RetryPolicy, Store,
     StoreError, StoreOptions, SweepAction, SweepState, open_store,
@@ -61,7 +62,7 @@ async fn backends(tag: &str) -> Vec<Backend> {
             cleanup: Some((admin, db)),
             _dir: None,
         }),
-        Err(why) => println!("PostgreSQL backend skipped: {why}"),
+        Err(why) => missing(&format!("the PostgreSQL backend: {why}")),
     }
     v
 }

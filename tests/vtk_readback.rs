@@ -1,9 +1,10 @@
 //! The ParaView files read back by VTK's own XML readers (the `vtk` package
 //! from PyPI, the readers ParaView uses): those of `knotsweep run --vtk` and
-//! those of `GET /api/cases/{id}/frames.zip`. Each centre line has one point
+//! those of `GET /api/cases/{id}/snapshots.zip`. Each centre line has one point
 //! per node and its fields, each contact file its forces, and the `.pvd`'s
-//! times increase. The `.pvd` checks need only `python3`; the readers are
-//! skipped, with the reason, when `import vtk` fails.
+//! times increase. The `.pvd` checks need only `python3`, the readers its
+//! `vtk` module: without them the checks are skipped with the reason, or fail
+//! when `CI` is set (`common::missing`).
 mod common;
 
 use common::*;
@@ -47,17 +48,17 @@ for (t, f), (_, g) in zip(parts["0"], parts["1"]):
     assert points.GetNumberOfVerts() == points.GetNumberOfPoints(), g
     assert arrays == {"stick": 1, "normal_force": 3, "friction_force": 3}, (g, arrays)
     contacts += points.GetNumberOfPoints()
-assert contacts > 0, "no contact in any frame"
+assert contacts > 0, "no contact in any snapshot"
 print(f"vtk {vtk.vtkVersion.GetVTKVersion()} read {len(sets)} files: {nodes} points per centre line, {contacts} contacts")
 "#;
 
-/// Runs [`CHECK`] (panicking on a failed check, printing why when skipped).
+/// Runs [`CHECK`] (panicking on a failed check; [`missing`] without python3 or VTK).
 fn check(pvd: &Path, nodes: usize, zip: Option<&Path>) {
     let mut cmd = Command::new("python3");
     cmd.args(["-c", CHECK]).arg(pvd).arg(nodes.to_string()).args(zip);
     let out = match cmd.output() {
         Ok(out) => out,
-        Err(e) => return println!("skipped: no python3 ({e})"),
+        Err(e) => return missing(&format!("no python3 ({e})")),
     };
     let text = format!(
         "{}{}",
@@ -66,7 +67,7 @@ fn check(pvd: &Path, nodes: usize, zip: Option<&Path>) {
     );
     match out.status.code() {
         Some(0) => println!("{text}"),
-        Some(3) => println!("VTK readers skipped: {text}"),
+        Some(3) => missing(&format!("the VTK readers: {text}")),
         _ => panic!("the VTK files do not read back: {text}"),
     }
 }
@@ -97,18 +98,18 @@ fn run_vtk_files_read_back() {
 }
 
 #[tokio::test]
-async fn frames_zip_reads_back() {
+async fn snapshots_zip_reads_back() {
     let (dir, db) = temp_db();
     let server = start(config(&db, 1)).await;
     let (url, c) = (server.url(), client());
-    let (status, _) = get_text(&c, &format!("{url}/api/cases/999/frames.zip")).await;
+    let (status, _) = get_text(&c, &format!("{url}/api/cases/999/snapshots.zip")).await;
     assert_eq!(status, StatusCode::NOT_FOUND);
     let base = with(tiny_base(), serde_json::json!({"min_l_k_bar": 115.0}));
     let id = submit_sweep(&c, &url, &serde_json::json!({ "base": base })).await;
     let sweep = wait_sweep(&c, &url, id, std::time::Duration::from_secs(300), finished).await;
     let case = case_ids(&sweep)[0];
     let r = c
-        .get(format!("{url}/api/cases/{case}/frames.zip"))
+        .get(format!("{url}/api/cases/{case}/snapshots.zip"))
         .send()
         .await
         .unwrap();
@@ -116,9 +117,9 @@ async fn frames_zip_reads_back() {
     assert_eq!(r.headers()["content-type"], "application/zip");
     assert_eq!(
         r.headers()["content-disposition"],
-        format!("attachment; filename=\"case-{case}-frames.zip\"").as_str()
+        format!("attachment; filename=\"case-{case}-snapshots.zip\"").as_str()
     );
-    let zip = dir.path().join("frames.zip");
+    let zip = dir.path().join("snapshots.zip");
     std::fs::write(&zip, r.bytes().await.unwrap()).unwrap();
     check(&dir.path().join(format!("case-{case}.pvd")), 121, Some(&zip));
     server.shutdown().await.unwrap();

@@ -2,9 +2,10 @@
 //! chromedriver (WebDriver over HTTP). Submit a certified custom sweep through
 //! the form, watch it finish, see its curves and phase diagram (with the
 //! refined twins' error bars), open a case's 3D knot and
-//! move the frame slider, cancel a sweep from the list, and get a field error
-//! for a bad value. Screenshots land in `target/tmp/web-*.png`. Skipped, with
-//! the reason, when chromium or chromedriver is not installed.
+//! move the snapshot slider, cancel a sweep from the list, and get a field error
+//! for a bad value. Screenshots land in `target/tmp/web-*.png`. Without
+//! chromium or chromedriver it is skipped with the reason, or fails when `CI`
+//! is set (`common::missing`).
 mod common;
 
 use common::*;
@@ -178,10 +179,7 @@ const KNOT_PIXELS: &str = "const c = document.querySelector('#knot canvas'); if 
 async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field_errors() {
     let browser = match Browser::start().await {
         Ok(b) => b,
-        Err(why) => {
-            println!("skipped: {why}");
-            return;
-        }
+        Err(why) => return missing(&why),
     };
     let (_dir, db) = temp_db();
     let server = start(config(&db, 1)).await;
@@ -334,7 +332,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .await;
     browser.screenshot("phase").await;
 
-    // The case page: a 3D knot that is drawn, and a slider that changes the frame.
+    // The case page: a 3D knot that is drawn, and a slider that changes the snapshot.
     browser
         .js(
             "document.querySelector('#cases a[href^=\"#/cases/\"]').click(); return true",
@@ -353,27 +351,27 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     assert!(drawn > 0.005, "the knot covers {drawn} of the canvas");
     let label = browser
         .js(
-            "return document.getElementById('frame-label').textContent",
+            "return document.getElementById('snapshot-label').textContent",
             json!([]),
         )
         .await;
-    let frames = browser
+    let snapshots = browser
         .js(
-            "const s = document.getElementById('frame'); return Number(s.max) + 1",
+            "const s = document.getElementById('snapshot'); return Number(s.max) + 1",
             json!([]),
         )
         .await;
-    assert!(frames.as_u64().unwrap() >= 2, "frames: {frames}");
+    assert!(snapshots.as_u64().unwrap() >= 2, "snapshots: {snapshots}");
     browser
-        .js("const s = document.getElementById('frame'); s.value = s.value === '0' ? s.max : '0'; s.dispatchEvent(new Event('input')); return true", json!([]))
+        .js("const s = document.getElementById('snapshot'); s.value = s.value === '0' ? s.max : '0'; s.dispatchEvent(new Event('input')); return true", json!([]))
         .await;
     let moved = browser
         .js(
-            "return document.getElementById('frame-label').textContent",
+            "return document.getElementById('snapshot-label').textContent",
             json!([]),
         )
         .await;
-    assert_ne!(label, moved, "the slider changes the frame");
+    assert_ne!(label, moved, "the slider changes the snapshot");
     browser.screenshot("case").await;
 
     // Cancel from the sweeps list.

@@ -42,11 +42,11 @@ def main(raw: Path) -> None:
         series, inv = report["series"], report["inversion"]
         ke = [s["kinetic_energy"] for s in series if 100 < s["l_k_bar"] < 160]
         after = series[inv["sample"]:]
-        flat = next((k for k, s in enumerate(after) if s["h_bar"] < FLAT), None)
+        flat = next((k for k, s in enumerate(after) if s["H_bar"] < FLAT), None)
         if flat is None:
             print(f"| {name} | {max(ke) / statistics.median(ke):.1f} | never | |")
             continue
-        h = [s["h_bar"] for s in after[flat:]]
+        h = [s["H_bar"] for s in after[flat:]]
         print(f"| {name} | {max(ke) / statistics.median(ke):.1f} | {after[flat]['l_k_bar']:.2f} | {min(h):.4f}-{max(h):.4f} |")
 
 

@@ -23,7 +23,7 @@ def window_mean(series, x, half=1.0):
 def series(path):
     """(l_k bar, F bar) of a run's CSV series or JSON report."""
     if path.endswith(".json"):
-        return [(s["l_k_bar"], s["f_bar"]) for s in json.load(open(path))["series"]]
+        return [(s["l_k_bar"], s["F_bar"]) for s in json.load(open(path))["series"]]
     return [(float(r["l_k_bar"]), float(r["F_bar"])) for r in csv.DictReader(open(path))]
 
 

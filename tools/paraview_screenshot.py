@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A picture of one frame of `knotsweep run --vtk DIR`, drawn as ParaView draws it (the same VTK readers and
+"""A picture of one snapshot of `knotsweep run --vtk DIR`, drawn as ParaView draws it (the same VTK readers and
 filters), with VTK's offscreen renderer: the centre line as a tube of the rod's radius coloured by curvature, the
 loaded contacts as beads (blue: sticking, orange: slipping). Needs `pip install vtk` (the wheel renders through EGL
 or OSMesa without a display; otherwise run it under `xvfb-run`).
@@ -14,8 +14,8 @@ import re
 import vtk
 
 
-def frames(pvd):
-    """(label, l_k bar, centre line file, contacts file) of each frame of a knotsweep .pvd, in time order."""
+def snapshots(pvd):
+    """(label, l_k bar, centre line file, contacts file) of each snapshot of a knotsweep .pvd, in time order."""
     text = open(pvd).read()
     entries = re.findall(r'<!-- (\w+): l_k bar ([\d.]+).*?-->\s*<DataSet[^>]*file="([^"]+)"/>\s*'
                          r'<DataSet[^>]*file="([^"]+)"/>', text)
@@ -94,11 +94,11 @@ def knot_actors(line, contacts):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("pvd")
-    ap.add_argument("--label", default="before_inversion", help="the first frame with this label (else the last)")
+    ap.add_argument("--label", default="before_inversion", help="the first snapshot with this label (else the last)")
     ap.add_argument("--out", default="paraview-knot.png")
     ap.add_argument("--size", default="1200x700")
     args = ap.parse_args()
-    found = frames(args.pvd)
+    found = snapshots(args.pvd)
     label, l_k_bar, line_file, contacts_file = next((f for f in found if f[0] == args.label), found[-1])
     line, contacts = read(line_file), read(contacts_file)
     renderer = vtk.vtkRenderer()

@@ -7,7 +7,7 @@ table, docs/API.md); ``knotsweep.Client(url)`` submits sweeps to a running
 """
 from ._native import PHYSICS_REVISION, ParameterError, __version__
 from ._params import PARAMETERS, Parameter
-from ._run import Frame, Inversion, Progress, Record, Result, Stage, Stats, run, validate
+from ._run import Inversion, Progress, Record, Result, Snapshot, Stage, Stats, run, validate
 from .client import ApiError, Client, Conflict, InvalidInput, NotFound, Sweep, Unauthorized
 
 __all__ = [
@@ -16,7 +16,6 @@ __all__ = [
     "ApiError",
     "Client",
     "Conflict",
-    "Frame",
     "InvalidInput",
     "Inversion",
     "NotFound",
@@ -25,6 +24,7 @@ __all__ = [
     "Progress",
     "Record",
     "Result",
+    "Snapshot",
     "Stage",
     "Stats",
     "Sweep",

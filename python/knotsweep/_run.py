@@ -30,8 +30,8 @@ class Record(dict):
 
 class Inversion(Record):
     """The inversion point (eq. 11's quantities; docs/API.md, "Phase diagram"):
-    ``l_k_bar``, ``l_c_over_l``, ``F_bar_before``, ``F_bar_after``,
-    ``h_bar_before``, ``h_bar_after``, ``kinetic_energy_ratio``, ``sample``."""
+    ``l_k_bar``, ``l_c_over_L``, ``F_bar_before``, ``F_bar_after``,
+    ``H_bar_before``, ``H_bar_after``, ``kinetic_energy_ratio``, ``sample``."""
 
 
 class Stats(Record):
@@ -46,8 +46,8 @@ class Stage(Record):
     ``to_l_k_bar``, ``steps``, ``newton_iterations``, ``contact_sweeps``."""
 
 
-class Frame(Record):
-    """A centreline snapshot: ``label``, ``l_k_bar``, ``points`` (a (K, 3)
+class Snapshot(Record):
+    """A state of the knot kept for viewers: ``label``, ``l_k_bar``, ``points`` (a (K, 3)
     numpy array, m), the other per-node quantities the solver records (numpy
     arrays) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``, ...)."""
 
@@ -57,7 +57,7 @@ class Progress(NamedTuple):
 
     fraction: float
     l_k_bar: float
-    h_bar: float
+    H_bar: float
     steps: int
 
 
@@ -68,7 +68,7 @@ class Result:
     ``topology_changed``, ``cancelled``) and ``reason``; ``params`` (every
     parameter, defaults filled in); ``inversion`` (None when there is none);
     ``series`` (numpy arrays by the columns of ``knotsweep run --csv``:
-    ``l_k_bar``, ``F_bar``, ``H_bar``, ...); ``frames``; ``stats``;
+    ``l_k_bar``, ``F_bar``, ``H_bar``, ...); ``snapshots``; ``stats``;
     ``stages``; ``writhe`` and ``start_twist`` (turns); the knot determinants
     ``determinant_initial`` and ``determinant_final``; ``report``, the whole
     report as a dict (without the series)."""
@@ -81,7 +81,7 @@ class Result:
         inversion = report.get("inversion")
         self.inversion: Inversion | None = Inversion(inversion) if inversion is not None else None
         self.series: dict[str, np.ndarray] = series
-        self.frames: list[Frame] = [_frame(f) for f in report.get("frames", [])]
+        self.snapshots: list[Snapshot] = [_snapshot(s) for s in report.get("snapshots", [])]
         self.stats = Stats(report.get("stats", {}))
         self.stages: list[Stage] = [Stage(s) for s in report.get("stages", [])]
         self.writhe: float = report.get("writhe", 0.0)
@@ -118,14 +118,14 @@ class Result:
         )
 
 
-def _frame(frame: dict) -> Frame:
-    """A report's frame with its per-node lists (points, and whatever else
+def _snapshot(snapshot: dict) -> Snapshot:
+    """A report's snapshot with its per-node lists (points, and whatever else
     the solver records per node) as numpy arrays."""
-    out = Frame(frame)
-    for key, value in frame.items():
+    out = Snapshot(snapshot)
+    for key, value in snapshot.items():
         if key != "contacts" and isinstance(value, list):
             out[key] = np.asarray(value, dtype=float)
-    out["points"] = np.asarray(frame["points"], dtype=float).reshape(-1, 3)
+    out["points"] = np.asarray(snapshot["points"], dtype=float).reshape(-1, 3)
     return out
 
 
@@ -141,9 +141,9 @@ def _progress_callback(progress: bool | Callable[[Progress], Any] | None):
         return None, None
     bar = tqdm(total=1000, bar_format="{l_bar}{bar}| {elapsed}<{remaining} {postfix}")
 
-    def update(fraction, l_k_bar, h_bar, steps):
+    def update(fraction, l_k_bar, H_bar, steps):
         bar.n = int(fraction * 1000)
-        bar.set_postfix_str(f"l_k bar {l_k_bar:.1f}  H bar {h_bar:.2f}", refresh=False)
+        bar.set_postfix_str(f"l_k bar {l_k_bar:.1f}  H bar {H_bar:.2f}", refresh=False)
         bar.refresh()
 
     return update, bar
@@ -180,7 +180,7 @@ def _run_doc() -> str:
         "The GIL is released while the solver runs, so threads run cases in parallel;\n"
         "Ctrl-C stops the case and raises KeyboardInterrupt.\n\n"
         "progress: True shows a progress bar (tqdm, if installed); a callable is called with a\n"
-        "    Progress(fraction, l_k_bar, h_bar, steps) after every sample, and returning False\n"
+        "    Progress(fraction, l_k_bar, H_bar, steps) after every sample, and returning False\n"
         "    stops the case (status 'cancelled').\n\n"
         "Case parameters (SI units):\n" + lines + "\n"
     )

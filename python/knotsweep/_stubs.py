@@ -58,11 +58,11 @@ class Record(dict[str, Any]):
 class Inversion(Record):
     """The inversion point (eq. 11's quantities)."""
     l_k_bar: float
-    l_c_over_l: float
+    l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
-    h_bar_before: float
-    h_bar_after: float
+    H_bar_before: float
+    H_bar_after: float
     kinetic_energy_ratio: float
     sample: int
 
@@ -88,8 +88,8 @@ class Stage(Record):
     newton_iterations: int
     contact_sweeps: int
 
-class Frame(Record):
-    """A centreline snapshot; points: (K, 3) array (m)."""
+class Snapshot(Record):
+    """A state of the knot kept for viewers; points: (K, 3) array (m)."""
     label: str
     l_k_bar: float
     points: np.ndarray
@@ -98,7 +98,7 @@ class Frame(Record):
 class Progress(NamedTuple):
     fraction: float
     l_k_bar: float
-    h_bar: float
+    H_bar: float
     steps: int
 
 class Result:
@@ -110,7 +110,7 @@ class Result:
     inversion: Inversion | None
     series: dict[str, np.ndarray]
     """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
-    frames: list[Frame]
+    snapshots: list[Snapshot]
     stats: Stats
     stages: list[Stage]
     writhe: float
@@ -179,7 +179,8 @@ class Client:
     def presets(self) -> list[dict[str, Any]]: ...
     def case(self, case_id: int) -> dict[str, Any]: ...
     def series(self, case_id: int, raw: bool = False) -> Any: ...
-    def frames(self, case_id: int) -> list[dict[str, Any]]: ...
+    def snapshots(self, case_id: int) -> list[dict[str, Any]]: ...
+    def limits(self) -> dict[str, Any]: ...
     def health(self) -> dict[str, Any]: ...
 '''
 

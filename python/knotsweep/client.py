@@ -108,8 +108,9 @@ class Client:
         _raise_for(response)
         return response
 
-    def _pages(self, path: str, page: int = 1000) -> list[dict]:
+    def _pages(self, path: str) -> list[dict]:
         items: list[dict] = []
+        page = self.limits()["max_page"]
         while True:
             response = self._get(path, limit=page, offset=len(items))
             batch = response.json()
@@ -171,12 +172,19 @@ class Client:
             return {name: np.asarray(table[name]) for name in table.dtype.names or ()}
         return _require_pandas("series").read_csv(io.StringIO(text))
 
-    def frames(self, case_id: int) -> list[dict]:
-        """A finished case's centreline snapshots, each ``points`` a (K, 3) numpy array."""
-        frames = self._get(f"/api/cases/{case_id}/frames").json()
-        for f in frames:
-            f["points"] = np.asarray(f["points"], dtype=float).reshape(-1, 3)
-        return frames
+    def snapshots(self, case_id: int) -> list[dict]:
+        """A finished case's snapshots (the knot's states kept for viewers), each
+        ``points`` a (K, 3) numpy array."""
+        snapshots = self._get(f"/api/cases/{case_id}/snapshots").json()
+        for s in snapshots:
+            s["points"] = np.asarray(s["points"], dtype=float).reshape(-1, 3)
+        return snapshots
+
+    def limits(self) -> dict:
+        """The service's limits and certification threshold (``/api/limits``):
+        ``max_cases``, ``max_body_bytes``, ``max_name_chars``,
+        ``max_idempotency_key_chars``, ``max_page``, ``converged_within``."""
+        return self._get("/api/limits").json()
 
     def health(self) -> dict:
         """``/healthz``: database, workers, stalled workers (no exception when degraded)."""
@@ -273,20 +281,22 @@ class Sweep:
     def phase_diagram(self, raw: bool = False):
         """The phase diagram as a pandas DataFrame, one row per case in grid
         order: ``case_id``, the varied parameters, ``status``, the inversion's
-        fields (``l_k_bar``, ``l_c_over_l``, ``F_bar_before``, ...; NaN without
+        fields (``l_k_bar``, ``l_c_over_L``, ``F_bar_before``, ...; NaN without
         one), ``simplified_l_k_bar`` (the simplified model's snap),
         ``reason`` and, for a certified sweep, ``refined_l_k_bar``,
         ``uncertainty`` (|refined - default| in l_k bar),
-        ``relative_uncertainty`` and ``converged`` (relative <= 2 %);
+        ``relative_uncertainty`` and ``converged`` (relative at most the
+        service's threshold, ``df.attrs["converged_within"]``);
         ``df.attrs`` holds the sweep's ``varied``, ``base``, ``preset``,
-        ``complete``, ``certified``, ``solver_version`` and
-        ``physics_revision``. ``raw=True``: the API's JSON as a dict."""
+        ``complete``, ``certified``, ``solver_version``,
+        ``physics_revision`` and ``converged_within``. ``raw=True``: the
+        API's JSON as a dict."""
         diagram = self.client._get(f"/api/sweeps/{self.id}/phase-diagram").json()
         if raw:
             return diagram
         pd = _require_pandas("phase_diagram")
-        fields = ["l_k_bar", "l_c_over_l", "F_bar_before", "F_bar_after", "h_bar_before",
-                  "h_bar_after", "kinetic_energy_ratio"]
+        fields = ["l_k_bar", "l_c_over_L", "F_bar_before", "F_bar_after", "H_bar_before",
+                  "H_bar_after", "kinetic_energy_ratio"]
         certified_columns = [("refined_l_k_bar", "refined_l_k_bar"), ("uncertainty", "absolute"),
                              ("relative_uncertainty", "relative"), ("converged", "converged")]
         rows = []
@@ -312,6 +322,7 @@ class Sweep:
         df.attrs.update({k: diagram.get(k) for k in (
             "sweep_id", "name", "preset", "status", "complete", "certified", "varied", "base",
             "solver_version", "physics_revision")})
+        df.attrs["converged_within"] = self.client.limits()["converged_within"]
         return df
 
     def series(self, case_id: int, raw: bool = False):

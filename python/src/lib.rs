@@ -141,7 +141,7 @@ fn validate(py: Python<'_>, params: &Bound<'_, PyDict>) -> PyResult<String> {
 /// Runs one case (the parameters as a dict) with the GIL released. Returns
 /// the report as JSON text without its series, and the series as numpy
 /// arrays by the columns of `knotsweep run --csv`. `progress`, if given, is
-/// called after every sample with (fraction, l_k_bar, h_bar, steps); False
+/// called after every sample with (fraction, l_k_bar, H_bar, steps); False
 /// cancels the case (status "cancelled"). Ctrl-C stops the case and raises
 /// KeyboardInterrupt.
 #[pyfunction]

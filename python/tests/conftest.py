@@ -1,7 +1,9 @@
 """Shared fixtures: the `knotsweep` binary the Python results are compared
 with and the server the client talks to. `KNOTSWEEP_BIN` names the binary
 (.ci/run sets it); without it the usual cargo target directories are
-searched, and the tests that need it are skipped when there is none."""
+searched. A test whose prerequisite (the binary, pandas) is missing is
+skipped, or fails when the environment variable CI is set (`missing`)."""
+import importlib
 import os
 import re
 import shutil
@@ -16,6 +18,22 @@ ROOT = Path(__file__).resolve().parents[2]
 # A case of a few seconds: one pass on a short rod, pulled fast at a constant speed (the solver's doc-test case,
 # under the reference protocol, so that its length scales with the pull).
 QUICK = dict(n=1, length=0.3, nodes=102, relax_time=0.1, pull_speed=0.01, min_l_k_bar=130.0, protocol="reference")
+
+
+def missing(why):
+    """A prerequisite of the calling test is missing: it fails when CI is set
+    (CI sets it, and .ci/run installs every prerequisite), else it is skipped."""
+    if os.environ.get("CI"):
+        pytest.fail(f"{why} (CI is set: a missing prerequisite fails the test)")
+    pytest.skip(why)
+
+
+def need(module):
+    """The module, imported, or `missing`."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as e:
+        missing(f"no {module} module ({e})")
 
 
 def _binary():
@@ -37,7 +55,7 @@ def _binary():
 def knotsweep_bin():
     path = _binary()
     if not path:
-        pytest.skip("no knotsweep binary: set KNOTSWEEP_BIN or `cargo build --release`")
+        missing("no knotsweep binary: set KNOTSWEEP_BIN or `cargo build --release`")
     return path
 
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import knotsweep
-from conftest import QUICK, TOKEN
+from conftest import QUICK, TOKEN, need
 
 
 @pytest.fixture(scope="module")
@@ -13,7 +13,7 @@ def client(server):
 
 
 def test_submit_wait_and_read_the_phase_diagram(client):
-    pd = pytest.importorskip("pandas")
+    pd = need("pandas")
     sweep = client.submit(base=QUICK, grid={"mu": [0.1, 0.2]}, name="python test")
     assert sweep.submitted["total"] == 2 and not sweep.submitted["replayed"]
     done = sweep.wait(progress=True, timeout=600)
@@ -29,8 +29,8 @@ def test_submit_wait_and_read_the_phase_diagram(client):
     assert len(series) > 10 and "F_bar" in series.columns
     raw = client.series(cases[0]["case_id"], raw=True)
     assert np.array_equal(raw["l_k_bar"], series["l_k_bar"].to_numpy())
-    frames = client.frames(cases[0]["case_id"])
-    assert frames[0]["points"].shape == (QUICK["nodes"], 3)
+    snapshots = client.snapshots(cases[0]["case_id"])
+    assert snapshots[0]["points"].shape == (QUICK["nodes"], 3)
     # The service computed what knotsweep.run computes here (its stored series
     # comes back through serde_json's float parser, within one ulp).
     mine = knotsweep.run(**QUICK, mu=0.1)
@@ -38,12 +38,13 @@ def test_submit_wait_and_read_the_phase_diagram(client):
 
 
 def test_a_certified_sweep_gives_each_point_its_uncertainty(client):
-    pytest.importorskip("pandas")
+    need("pandas")
     sweep = client.submit(base=QUICK, grid={"mu": [0.3]}, certify=True)
     assert sweep.submitted["total"] == 2, "the point and its refined twin"
     assert sweep.wait(timeout=600)["status"] == "done"
     df = sweep.phase_diagram()
     assert df.attrs["certified"] and len(df) == 1
+    assert df.attrs["converged_within"] == client.limits()["converged_within"] > 0
     assert {"refined_l_k_bar", "uncertainty", "relative_uncertainty", "converged"} <= set(df.columns)
     twin = [c for c in sweep.cases() if c["twin_of"] is not None]
     assert [c["twin_of"] for c in twin] == list(df["case_id"])

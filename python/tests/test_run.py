@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import knotsweep
-from conftest import QUICK
+from conftest import QUICK, need
 
 # The same small case through the CLI and through Python: n = 2, about 2 s, with an
 # inversion (at l_k bar 64.0).
@@ -40,8 +40,8 @@ def test_same_inversion_and_series_as_the_cli(knotsweep_bin, tmp_path):
         assert np.array_equal(values, table[column]), column
     assert r.stats.steps == cli["stats"]["steps"]
     assert [s["stage"] for s in r.report["stages"]] == [s["stage"] for s in cli["stages"]]
-    assert len(r.frames) == len(cli["frames"])
-    for mine, theirs in zip(r.frames, cli["frames"]):
+    assert len(r.snapshots) == len(cli["snapshots"])
+    for mine, theirs in zip(r.snapshots, cli["snapshots"]):
         assert mine.label == theirs["label"]
         assert np.array_equal(mine.points, np.array(theirs["points"]))
     assert r.determinant_initial == cli["determinant_initial"] == 5
@@ -90,9 +90,9 @@ def test_result_series_and_pandas():
     assert r.completed, r.reason
     assert r.series["l_k_bar"].dtype == np.float64 and r.series["contacts"].dtype == np.int64
     assert np.all(np.diff(r.series["l_k_bar"]) < 0)
-    assert r.frames and r.frames[0].points.shape == (102, 3)
+    assert r.snapshots and r.snapshots[0].points.shape == (102, 3)
     assert r.stats.steps > 0 and r.stages
-    pd = pytest.importorskip("pandas")
+    pd = need("pandas")
     df = r.to_pandas()
     assert isinstance(df, pd.DataFrame) and len(df) == len(r.series["F_bar"])
 

@@ -7,8 +7,10 @@
 //! - [`simplified_doc`] and [`validation`]: `docs/SIMPLIFIED_MODEL.md` and
 //!   `docs/VALIDATION.md` with the figures they link;
 //! - [`parameters`]: the parameter table of `docs/API.md`;
-//! - [`vtk`]: a case's frames as ParaView files (VTK XML `.vtp` and `.pvd`).
+//! - [`markdown`]: the tables of those documents;
+//! - [`vtk`]: a case's snapshots as ParaView files (VTK XML `.vtp` and `.pvd`).
 pub mod charts;
+pub mod markdown;
 pub mod parameters;
 pub mod simplified;
 pub mod simplified_doc;

@@ -1,5 +1,6 @@
 //! docs/API.md's section on the case parameters: the table
 //! `solver::case::PARAMETERS` as markdown.
+use crate::markdown::{left, table};
 use solver::case::PARAMETERS;
 
 /// The heading that opens the section in docs/API.md.
@@ -7,42 +8,32 @@ pub const HEADING: &str = "## Case parameters (`CaseParams`)";
 
 /// The section, from its heading to the blank line after the table.
 pub fn parameters_section() -> String {
-    let mut text = format!(
+    let intro = format!(
         "{HEADING}\n\n\
          Generated from `solver::case::PARAMETERS`, the table the CLI's flags, the OpenAPI schema and the web form \
          are made from and `CaseParams::validate` checks (`UPDATE_DOCS=1 cargo test -p knotsweep-report --test \
          api_doc` rewrites this section). Every field is optional; SI units. A value out of its range is a 422 naming \
-         the field and the reason.\n\n\
-         | field | unit | default | range | paper | meaning |\n\
-         | --- | --- | --- | --- | --- | --- |\n"
+         the field and the reason.\n\n"
     );
-    for p in PARAMETERS {
+    let rows = PARAMETERS.iter().map(|p| {
         let meaning = match p.null {
             Some(null) => format!("{} null: {null}.", p.doc),
             None => p.doc.to_string(),
         };
-        let cells = [
+        [
             format!("`{}`", p.name),
             p.unit.to_string(),
             format!("`{}`", p.default),
             p.range_text(),
             p.paper.to_string(),
             meaning,
-        ];
-        let cells: Vec<String> = cells.iter().map(|c| cell(c)).collect();
-        text.push_str(&format!("| {} |\n", cells.join(" | ")));
-    }
-    text.push('\n');
-    text
-}
-
-/// A table cell: pipes escaped, empty cells as a dash.
-fn cell(text: &str) -> String {
-    if text.is_empty() {
-        "-".to_string()
-    } else {
-        text.replace('|', "\\|")
-    }
+        ]
+    });
+    intro
+        + &table(
+            &left(&["field", "unit", "default", "range", "paper", "meaning"]),
+            rows,
+        )
 }
 
 /// `document` with its parameter section (from [`HEADING`] to the next

@@ -1,10 +1,11 @@
 //! `docs/SIMPLIFIED_MODEL.md`: the simplified model's results (paper Sec. 5,
 //! `solver::simplified::reproduce`) as markdown and the SVG figures it links
 //! ([`crate::simplified`]); `knotsweep simplified doc` writes them.
-use crate::simplified as svg;
+use crate::markdown::{Align, left, right, table};
+use crate::simplified::{self as svg, BraidError, CriticalShape, SnapPoint};
+use anyhow::Result;
 use solver::simplified::reproduce::{Reproduction, SweepRow};
 use solver::simplified::{BifurcationSpec, Params};
-use std::fmt::Write;
 
 /// A generated document: markdown and the SVG figures it links (relative to
 /// the markdown file, under `simplified/`).
@@ -35,360 +36,375 @@ fn extrapolate(rows: &[SweepRow], pick: fn(&SweepRow) -> Option<f64>) -> Option<
 
 /// Writes `docs/SIMPLIFIED_MODEL.md` and its figures from a [`Reproduction`].
 pub trait SimplifiedDocument {
-    fn document(&self) -> Document;
+    fn document(&self) -> Result<Document>;
     fn markdown(&self) -> String;
 }
 
 impl SimplifiedDocument for Reproduction {
     /// `docs/SIMPLIFIED_MODEL.md` and its figures.
-    fn document(&self) -> Document {
+    fn document(&self) -> Result<Document> {
         let p = &self.spec.params;
         let lk = self.spec.landscape_l_k_bar;
-        let mut figures = Vec::new();
-        figures.push(Figure {
-            file_name: "schematic.svg".into(),
-            svg: svg::schematic(p, lk, 0.0, &self.planar_loop, 1.0),
-        });
-        let critical: Vec<(f64, bool, Vec<[f64; 3]>)> = self
-            .landscape
-            .critical_points
-            .iter()
-            .map(|c| (c.theta, c.stable, c.loop_centerline.clone()))
+        let figure = |name: &str, svg: Result<String>| {
+            svg.map(|svg| Figure {
+                file_name: name.to_string(),
+                svg,
+            })
+        };
+        let critical: Vec<CriticalShape> = (self.landscape.critical_points.iter())
+            .map(|c| CriticalShape {
+                theta: c.theta,
+                stable: c.stable,
+                centerline: c.loop_centerline.clone(),
+            })
             .collect();
-        figures.push(Figure {
-            file_name: "critical_shapes.svg".into(),
-            svg: svg::critical_shapes(p, lk, &critical),
-        });
-        figures.push(Figure {
-            file_name: "landscape.svg".into(),
-            svg: svg::landscape(&self.landscape),
-        });
-        figures.push(Figure {
-            file_name: "bifurcation.svg".into(),
-            svg: svg::bifurcation(&self.bifurcation, &[(lk, format!("l̄_k = {lk}"))]),
-        });
-        let radius: Vec<(f64, Option<f64>)> = self
-            .radius_sweep
-            .iter()
-            .map(|r| (r.radius * 1e3, r.snap_l_k_bar))
+        let radius: Vec<SnapPoint> = (self.radius_sweep.iter())
+            .map(|r| SnapPoint {
+                x: r.radius * 1e3,
+                snap: r.snap_l_k_bar,
+            })
             .collect();
         let mean = {
-            let v: Vec<f64> = radius.iter().filter_map(|r| r.1).collect();
+            let v: Vec<f64> = radius.iter().filter_map(|r| r.snap).collect();
             v.iter().sum::<f64>() / v.len().max(1) as f64
         };
-        figures.push(Figure {
-            file_name: "snap_vs_radius.svg".into(),
-            svg: svg::snap_sweep(
-                &format!("snap l̄_k vs rod radius (n = {}), cf. Fig. 14", p.n),
-                "h (mm)",
-                &radius,
-                Some((0.8 * mean, 1.2 * mean)),
-            ),
-        });
-        let ns: Vec<(f64, Option<f64>)> = self
-            .n_sweep
-            .iter()
-            .map(|r| (f64::from(r.n), r.snap_l_k_bar))
+        let ns: Vec<SnapPoint> = (self.n_sweep.iter())
+            .map(|r| SnapPoint {
+                x: f64::from(r.n),
+                snap: r.snap_l_k_bar,
+            })
             .collect();
-        figures.push(Figure {
-            file_name: "snap_vs_n.svg".into(),
-            svg: svg::snap_sweep(
-                &format!(
-                    "snap l̄_k vs unknotting number (h = {:.2} mm), cf. Fig. 15",
-                    self.spec.n_sweep_radius / 1e-3
+        let braid: Vec<BraidError> = (self.braid_convergence.iter())
+            .map(|r| BraidError {
+                nodes: r.nodes,
+                relative_error: r.relative_error,
+            })
+            .collect();
+        let figures = vec![
+            figure(
+                "schematic.svg",
+                svg::schematic(p, lk, 0.0, &self.planar_loop, 1.0),
+            )?,
+            figure("critical_shapes.svg", svg::critical_shapes(p, lk, &critical))?,
+            figure("landscape.svg", svg::landscape(&self.landscape))?,
+            figure(
+                "bifurcation.svg",
+                svg::bifurcation(&self.bifurcation, &[(lk, format!("l̄_k = {lk}"))]),
+            )?,
+            figure(
+                "snap_vs_radius.svg",
+                svg::snap_sweep(
+                    &format!("snap l̄_k vs rod radius (n = {}), cf. Fig. 14", p.n),
+                    "h (mm)",
+                    &radius,
+                    Some((0.8 * mean, 1.2 * mean)),
                 ),
-                "n",
-                &ns,
-                None,
-            ),
-        });
-        figures.push(Figure {
-            file_name: "braid_convergence.svg".into(),
-            svg: svg::braid_convergence(
-                &self
-                    .braid_convergence
-                    .iter()
-                    .map(|r| (r.nodes, r.relative_error))
-                    .collect::<Vec<_>>(),
-            ),
-        });
-        Document {
+            )?,
+            figure(
+                "snap_vs_n.svg",
+                svg::snap_sweep(
+                    &format!(
+                        "snap l̄_k vs unknotting number (h = {:.2} mm), cf. Fig. 15",
+                        self.spec.n_sweep_radius / 1e-3
+                    ),
+                    "n",
+                    &ns,
+                    None,
+                ),
+            )?,
+            figure("braid_convergence.svg", svg::braid_convergence(&braid))?,
+        ];
+        Ok(Document {
             markdown: self.markdown(),
             figures,
-        }
+        })
     }
 
     fn markdown(&self) -> String {
-        let p = &self.spec.params;
-        let lk = self.spec.landscape_l_k_bar;
-        let mut s = String::new();
-        let _ = writeln!(s, "# The simplified knot model (paper Sec. 5)\n");
-        let _ = writeln!(
-            s,
-            "Generated by `knotsweep simplified doc` (library: `solver::simplified::reproduce(&ReproductionSpec::default())` \
-             then `Reproduction::document()`); do not edit by hand. Source: `solver/src/simplified/`.\n"
-        );
-        let _ = writeln!(
-            s,
-            "Parameters: n = {}, ε = {}, φ = {:.4} rad (π/3 = 1.0472), h = {:.2} mm, E = {:.2} MPa, ν = {}, \
-             loop nodes K = {}, twist convention `{:?}`. Lengths are in rod radii h and energies in EI/h \
-             (eq. 12): l̄_b = ε l̄_k/(1+ε), l̄_l = l̄_k/(1+ε).\n",
-            p.n,
-            p.epsilon,
-            p.phi,
-            p.radius / 1e-3,
-            p.material.youngs_modulus / 1e6,
-            p.material.poisson_ratio,
-            p.loop_nodes,
-            p.end_twist
-        );
-        s.push_str(GEOMETRY);
-        s.push_str(
-            "![braid and loop at θ = 0](simplified/schematic.svg)\n\n(a) The braid (strands A, B) and the equilibrium loop \
-             at θ = 0 with the clamp points and tangents; (b) the braid's ends seen down z at θ = 0 (open) and \
-             θ = 1 (filled).\n\n",
-        );
-        s.push_str(BRAID);
-        let _ = writeln!(
-            s,
-            "| nodes per strand | Ē_b (DER) | Ē_b (eq. 14) | relative error | observed order |"
-        );
-        let _ = writeln!(s, "|---:|---:|---:|---:|---:|");
-        for r in &self.braid_convergence {
-            let _ = writeln!(
-                s,
-                "| {} | {:.8} | {:.8} | {:.3e} | {} |",
-                r.nodes,
-                r.discrete,
-                r.closed_form,
-                r.relative_error,
-                opt(r.observed_order, 3)
-            );
-        }
-        s.push_str("\n![braid convergence](simplified/braid_convergence.svg)\n\n");
-        s.push_str(LOOP);
-        let _ = writeln!(
-            s,
-            "| θ | dĒ_l/dθ (reaction identity) | central difference of Ē_l (δθ = 1e-3) | relative difference |"
-        );
-        let _ = writeln!(s, "|---:|---:|---:|---:|");
-        for r in &self.derivative_check {
-            let _ = writeln!(
-                s,
-                "| {:.2} | {:.8} | {:.8} | {:.1e} |",
-                r.theta,
-                r.identity,
-                r.finite_difference,
-                ((r.identity - r.finite_difference) / r.finite_difference).abs()
-            );
-        }
-        let l = &self.landscape;
-        let _ = writeln!(s, "\n## Energy landscape at l̄_k = {lk} (Fig. 13 a, b)\n");
-        let _ = writeln!(
-            s,
-            "Ē(θ) on {} points of θ ∈ [0, 5], one continuation from θ = 0 ({} Newton iterations in all, \
-             including the refinement of the critical points). Critical points (sign changes of dĒ/dθ \
-             refined by the Illinois method; stability from d²Ē/dθ² by central differences):\n",
-            l.points.len(),
-            l.newton_iterations
-        );
-        let _ = writeln!(
-            s,
-            "| θ* | Ē | d²Ē/dθ² | stability in θ | negative pivots of the loop |"
-        );
-        let _ = writeln!(s, "|---:|---:|---:|---|---:|");
-        for c in &l.critical_points {
-            let _ = writeln!(
-                s,
-                "| {:.4} | {:.5} | {:+.4} | {} | {} |",
-                c.theta,
-                c.energy,
-                c.d2energy_dtheta2,
-                if c.stable { "stable" } else { "unstable" },
-                c.loop_negative_pivots
-            );
-        }
-        let pattern: Vec<bool> = l.critical_points.iter().map(|c| c.stable).collect();
-        let verdict = if pattern == [true, false, true] {
-            "Three critical points, the outer two stable and the middle one unstable, as in the paper's Fig. 13 (a, b)."
-        } else {
-            "This does NOT match the paper's three critical points (stable, unstable, stable)."
-        };
-        if let Some(first) = l.points.first() {
-            let _ = writeln!(
-                s,
-                "\nAt θ = 0 the loop's twisting energy is {:.1e} of its energy (the clamps sit ±h off its plane).",
-                first.loop_twisting / first.loop_energy
-            );
-        }
-        let unstable_loop = l.points.iter().filter(|q| q.loop_negative_pivots > 0).count();
-        let _ = writeln!(
-            s,
-            "\n{verdict} Grid points where the loop itself is unstable at fixed θ (negative pivots of its clamped \
-             stiffness): {unstable_loop} of {}.\n",
-            l.points.len()
-        );
-        s.push_str("![energy landscape](simplified/landscape.svg)\n\n");
-        s.push_str("Braid and loop at each critical point (same view as (a) above):\n\n");
-        s.push_str("![loop at the critical points](simplified/critical_shapes.svg)\n\n");
-        let b = &self.bifurcation;
-        let _ = writeln!(s, "## Bifurcation diagram (Fig. 13 c)\n");
-        s.push_str(BIFURCATION);
-        let _ = writeln!(
-            s,
-            "Traced from l̄_k = {} down to {} ({} points):\n",
-            b.spec.l_k_max,
-            b.spec.l_k_min,
-            b.branch.len()
-        );
-        let _ = writeln!(s, "| fold | l̄_k | θ |");
-        let _ = writeln!(s, "|---|---:|---:|");
-        for (i, f) in b.folds.iter().enumerate() {
-            let name = if i == 0 {
+        [
+            intro(self),
+            GEOMETRY.to_string(),
+            SCHEMATIC.to_string(),
+            braid_section(self),
+            loop_section(self),
+            landscape_section(self),
+            bifurcation_section(self),
+            radius_section(self),
+            n_section(self),
+            conventions_section(self),
+            LIMITATIONS.to_string(),
+        ]
+        .concat()
+    }
+}
+
+/// The title, how the document is made and the model's parameters.
+fn intro(r: &Reproduction) -> String {
+    let p = &r.spec.params;
+    format!(
+        "# The simplified knot model (paper Sec. 5)\n\n\
+         Generated by `knotsweep simplified doc` (library: `solver::simplified::reproduce(&ReproductionSpec::default())` \
+         then `Reproduction::document()`); do not edit by hand. Source: `solver/src/simplified/`.\n\n\
+         Parameters: n = {}, ε = {}, φ = {:.4} rad (π/3 = 1.0472), h = {:.2} mm, E = {:.2} MPa, ν = {}, \
+         loop nodes K = {}, twist convention `{:?}`. Lengths are in rod radii h and energies in EI/h \
+         (eq. 12): l̄_b = ε l̄_k/(1+ε), l̄_l = l̄_k/(1+ε).\n\n",
+        p.n,
+        p.epsilon,
+        p.phi,
+        p.radius / 1e-3,
+        p.material.youngs_modulus / 1e6,
+        p.material.poisson_ratio,
+        p.loop_nodes,
+        p.end_twist
+    )
+}
+
+/// The braid's energy, DER against eq. (14), and its convergence figure.
+fn braid_section(r: &Reproduction) -> String {
+    let rows = r.braid_convergence.iter().map(|b| {
+        [
+            b.nodes.to_string(),
+            format!("{:.8}", b.discrete),
+            format!("{:.8}", b.closed_form),
+            format!("{:.3e}", b.relative_error),
+            opt(b.observed_order, 3),
+        ]
+    });
+    let columns = right(&[
+        "nodes per strand",
+        "Ē_b (DER)",
+        "Ē_b (eq. 14)",
+        "relative error",
+        "observed order",
+    ]);
+    format!(
+        "{BRAID}{}![braid convergence](simplified/braid_convergence.svg)\n\n",
+        table(&columns, rows)
+    )
+}
+
+/// dĒ_l/dθ from the reaction identity against central differences.
+fn loop_section(r: &Reproduction) -> String {
+    let rows = r.derivative_check.iter().map(|d| {
+        [
+            format!("{:.2}", d.theta),
+            format!("{:.8}", d.identity),
+            format!("{:.8}", d.finite_difference),
+            format!(
+                "{:.1e}",
+                ((d.identity - d.finite_difference) / d.finite_difference).abs()
+            ),
+        ]
+    });
+    let columns = right(&[
+        "θ",
+        "dĒ_l/dθ (reaction identity)",
+        "central difference of Ē_l (δθ = 1e-3)",
+        "relative difference",
+    ]);
+    format!("{LOOP}{}", table(&columns, rows))
+}
+
+/// The energy landscape and its critical points (Fig. 13 a, b).
+fn landscape_section(r: &Reproduction) -> String {
+    let (l, lk) = (&r.landscape, r.spec.landscape_l_k_bar);
+    let rows = l.critical_points.iter().map(|c| {
+        [
+            format!("{:.4}", c.theta),
+            format!("{:.5}", c.energy),
+            format!("{:+.4}", c.d2energy_dtheta2),
+            if c.stable { "stable" } else { "unstable" }.to_string(),
+            c.loop_negative_pivots.to_string(),
+        ]
+    });
+    let columns = [
+        ("θ*", Align::Right),
+        ("Ē", Align::Right),
+        ("d²Ē/dθ²", Align::Right),
+        ("stability in θ", Align::Left),
+        ("negative pivots of the loop", Align::Right),
+    ];
+    let pattern: Vec<bool> = l.critical_points.iter().map(|c| c.stable).collect();
+    let verdict = if pattern == [true, false, true] {
+        "Three critical points, the outer two stable and the middle one unstable, as in the paper's Fig. 13 (a, b)."
+    } else {
+        "This does NOT match the paper's three critical points (stable, unstable, stable)."
+    };
+    let twisting = l.points.first().map_or(String::new(), |first| {
+        format!(
+            "At θ = 0 the loop's twisting energy is {:.1e} of its energy (the clamps sit ±h off its plane).\n\n",
+            first.loop_twisting / first.loop_energy
+        )
+    });
+    let unstable_loop = l.points.iter().filter(|q| q.loop_negative_pivots > 0).count();
+    format!(
+        "## Energy landscape at l̄_k = {lk} (Fig. 13 a, b)\n\n\
+         Ē(θ) on {} points of θ ∈ [0, 5], one continuation from θ = 0 ({} Newton iterations in all, \
+         including the refinement of the critical points). Critical points (sign changes of dĒ/dθ \
+         refined by the Illinois method; stability from d²Ē/dθ² by central differences):\n\n{}{twisting}\
+         {verdict} Grid points where the loop itself is unstable at fixed θ (negative pivots of its clamped \
+         stiffness): {unstable_loop} of {}.\n\n\
+         ![energy landscape](simplified/landscape.svg)\n\n\
+         Braid and loop at each critical point (same view as (a) above):\n\n\
+         ![loop at the critical points](simplified/critical_shapes.svg)\n\n",
+        l.points.len(),
+        l.newton_iterations,
+        table(&columns, rows),
+        l.points.len()
+    )
+}
+
+/// The critical curve, its folds and the loop's discretisation (Fig. 13 c).
+fn bifurcation_section(r: &Reproduction) -> String {
+    let b = &r.bifurcation;
+    let folds = b.folds.iter().enumerate().map(|(i, f)| {
+        [
+            if i == 0 {
                 "snap (first met from large l̄_k)"
             } else {
                 "birth of the second stable state"
-            };
-            let _ = writeln!(s, "| {name} | {:.3} | {:.4} |", f.l_k_bar, f.theta);
-        }
-        s.push_str("\n![bifurcation diagram](simplified/bifurcation.svg)\n\n");
-        let _ = writeln!(
-            s,
-            "Discretisation of the loop (second order in 1/(K-2); Richardson extrapolation from the last two rows):\n"
-        );
-        let _ = writeln!(s, "| K | snap l̄_k | upper fold l̄_k |");
-        let _ = writeln!(s, "|---:|---:|---:|");
-        for r in &self.loop_convergence {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} |",
-                r.loop_nodes,
-                opt(r.snap_l_k_bar, 3),
-                opt(r.upper_l_k_bar, 3)
-            );
-        }
-        let _ = writeln!(
-            s,
-            "| extrapolated | {} | {} |\n",
-            opt(extrapolate(&self.loop_convergence, |r| r.snap_l_k_bar), 3),
-            opt(extrapolate(&self.loop_convergence, |r| r.upper_l_k_bar), 3)
-        );
-        let _ = writeln!(s, "## Snap l̄_k against the rod radius (Fig. 14, n = {})\n", p.n);
-        let snaps: Vec<f64> = self.radius_sweep.iter().filter_map(|r| r.snap_l_k_bar).collect();
-        let (lo, hi) = snaps
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(*v), b.max(*v))
-            });
-        let _ = writeln!(
-            s,
-            "In the model h enters only through the nondimensionalisation (the braid radius is h, the loop \
-             length l̄_l h, EA : EI : GJ scale as 1 : h² : h²), so the snap l̄_k must be independent of h up to \
-             the solver's tolerance. Relative spread over the sweep: {:.1e}.\n",
-            (hi - lo) / lo
-        );
-        let _ = writeln!(s, "| h (mm) | snap l̄_k | upper fold l̄_k |");
-        let _ = writeln!(s, "|---:|---:|---:|");
-        for r in &self.radius_sweep {
-            let _ = writeln!(
-                s,
-                "| {:.1} | {} | {} |",
-                r.radius * 1e3,
-                opt(r.snap_l_k_bar, 6),
-                opt(r.upper_l_k_bar, 6)
-            );
-        }
-        s.push_str("\n![snap vs radius](simplified/snap_vs_radius.svg)\n\n");
-        let _ = writeln!(
-            s,
-            "## Snap l̄_k against the unknotting number (Fig. 15, h = {:.2} mm)\n",
-            self.spec.n_sweep_radius / 1e-3
-        );
-        let _ = writeln!(s, "| n | snap l̄_k | upper fold l̄_k |");
-        let _ = writeln!(s, "|---:|---:|---:|");
-        for r in &self.n_sweep {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} |",
-                r.n,
-                opt(r.snap_l_k_bar, 3),
-                opt(r.upper_l_k_bar, 3)
-            );
-        }
-        let snaps: Vec<(u32, f64)> = self
-            .n_sweep
-            .iter()
-            .filter_map(|r| r.snap_l_k_bar.map(|v| (r.n, v)))
-            .collect();
-        let increasing = snaps.windows(2).all(|w| w[1].1 > w[0].1);
-        let _ = writeln!(
-            s,
-            "\nThe snap l̄_k {} with n over the unknotting numbers that have a snap ({}); the paper's Fig. 15 has it growing. The full model's inversion points (DER with frictional contact, same h and n values) are in `docs/VALIDATION.md`, regenerated by `knotsweep reproduce`.",
-            if increasing {
-                "grows"
-            } else {
-                "does NOT grow monotonically"
-            },
-            snaps
-                .iter()
-                .map(|(n, _)| n.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        for r in self.n_sweep.iter().filter(|r| r.snap_l_k_bar.is_none()) {
-            let window = BifurcationSpec::for_params(Params { n: r.n, ..*p });
-            if r.curve_points == 0 {
-                let _ = writeln!(
-                    s,
-                    "For n = {} there is no critical point at l̄_k = {}: no snap.",
-                    r.n, window.l_k_max
-                );
-            } else {
-                let _ = writeln!(
-                    s,
-                    "For n = {} the traced critical curve has no fold in l̄_k ∈ [{}, {}]: no snap.",
-                    r.n, window.l_k_min, window.l_k_max
-                );
             }
-        }
-        s.push_str(N_TREND);
-        s.push_str("![snap vs n](simplified/snap_vs_n.svg)\n\n");
-        let _ = writeln!(s, "## Twist conventions of the clamps\n");
-        s.push_str(CONVENTIONS);
-        let _ = writeln!(
-            s,
-            "| convention | critical points at l̄_k = {lk} (θ, s: stable, u: unstable) | folds (l̄_k) | paper's sequence | notes |"
-        );
-        let _ = writeln!(s, "|---|---|---|---|---|");
-        for c in &self.conventions {
-            let cps: Vec<String> = c
-                .critical_points
-                .iter()
-                .map(|(t, st)| format!("{t:.3} {}", if *st { "s" } else { "u" }))
-                .collect();
-            let folds: Vec<String> = c.folds.iter().map(|f| format!("{:.2}", f.l_k_bar)).collect();
-            let _ = writeln!(
-                s,
-                "| `{:?}` | {} | {} | {} | {} |",
-                c.end_twist,
-                if cps.is_empty() {
-                    "—".into()
-                } else {
-                    cps.join(", ")
-                },
-                if folds.is_empty() {
-                    "—".into()
-                } else {
-                    folds.join(", ")
-                },
-                if c.matches_paper() { "yes" } else { "no" },
-                c.failure.as_deref().unwrap_or("")
-            );
-        }
-        s.push_str(LIMITATIONS);
-        s
-    }
+            .to_string(),
+            format!("{:.3}", f.l_k_bar),
+            format!("{:.4}", f.theta),
+        ]
+    });
+    let mut convergence: Vec<[String; 3]> = (r.loop_convergence.iter())
+        .map(|k| {
+            [
+                k.loop_nodes.to_string(),
+                opt(k.snap_l_k_bar, 3),
+                opt(k.upper_l_k_bar, 3),
+            ]
+        })
+        .collect();
+    convergence.push([
+        "extrapolated".to_string(),
+        opt(extrapolate(&r.loop_convergence, |k| k.snap_l_k_bar), 3),
+        opt(extrapolate(&r.loop_convergence, |k| k.upper_l_k_bar), 3),
+    ]);
+    format!(
+        "## Bifurcation diagram (Fig. 13 c)\n\n{BIFURCATION}Traced from l̄_k = {} down to {} ({} points):\n\n{}\
+         ![bifurcation diagram](simplified/bifurcation.svg)\n\n\
+         Discretisation of the loop (second order in 1/(K-2); Richardson extrapolation from the last two rows):\n\n{}",
+        b.spec.l_k_max,
+        b.spec.l_k_min,
+        b.branch.len(),
+        table(
+            &[("fold", Align::Left), ("l̄_k", Align::Right), ("θ", Align::Right)],
+            folds
+        ),
+        table(&right(&["K", "snap l̄_k", "upper fold l̄_k"]), convergence)
+    )
 }
+
+/// The snap against the rod radius (Fig. 14): independent of h.
+fn radius_section(r: &Reproduction) -> String {
+    let snaps: Vec<f64> = r.radius_sweep.iter().filter_map(|k| k.snap_l_k_bar).collect();
+    let (lo, hi) = (snaps.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(*v), b.max(*v))
+    });
+    let rows = r.radius_sweep.iter().map(|k| {
+        [
+            format!("{:.1}", k.radius * 1e3),
+            opt(k.snap_l_k_bar, 6),
+            opt(k.upper_l_k_bar, 6),
+        ]
+    });
+    format!(
+        "## Snap l̄_k against the rod radius (Fig. 14, n = {})\n\n\
+         In the model h enters only through the nondimensionalisation (the braid radius is h, the loop \
+         length l̄_l h, EA : EI : GJ scale as 1 : h² : h²), so the snap l̄_k must be independent of h up to \
+         the solver's tolerance. Relative spread over the sweep: {:.1e}.\n\n{}\
+         ![snap vs radius](simplified/snap_vs_radius.svg)\n\n",
+        r.spec.params.n,
+        (hi - lo) / lo,
+        table(&right(&["h (mm)", "snap l̄_k", "upper fold l̄_k"]), rows)
+    )
+}
+
+/// The snap against the unknotting number (Fig. 15).
+fn n_section(r: &Reproduction) -> String {
+    let rows = r
+        .n_sweep
+        .iter()
+        .map(|k| [k.n.to_string(), opt(k.snap_l_k_bar, 3), opt(k.upper_l_k_bar, 3)]);
+    let snaps: Vec<(u32, f64)> = (r.n_sweep.iter())
+        .filter_map(|k| k.snap_l_k_bar.map(|v| (k.n, v)))
+        .collect();
+    let increasing = snaps.windows(2).all(|w| w[1].1 > w[0].1);
+    let without: String = (r.n_sweep.iter())
+        .filter(|k| k.snap_l_k_bar.is_none())
+        .map(|k| {
+            let window = BifurcationSpec::for_params(Params {
+                n: k.n,
+                ..r.spec.params
+            });
+            if k.curve_points == 0 {
+                format!(
+                    "For n = {} there is no critical point at l̄_k = {}: no snap.\n",
+                    k.n, window.l_k_max
+                )
+            } else {
+                format!(
+                    "For n = {} the traced critical curve has no fold in l̄_k ∈ [{}, {}]: no snap.\n",
+                    k.n, window.l_k_min, window.l_k_max
+                )
+            }
+        })
+        .collect();
+    format!(
+        "## Snap l̄_k against the unknotting number (Fig. 15, h = {:.2} mm)\n\n{}\
+         The snap l̄_k {} with n over the unknotting numbers that have a snap ({}); the paper's Fig. 15 has it \
+         growing. The full model's inversion points (DER with frictional contact, same h and n values) are in \
+         `docs/VALIDATION.md`, regenerated by `knotsweep reproduce`.\n{without}{N_TREND}\
+         ![snap vs n](simplified/snap_vs_n.svg)\n\n",
+        r.spec.n_sweep_radius / 1e-3,
+        table(&right(&["n", "snap l̄_k", "upper fold l̄_k"]), rows),
+        if increasing {
+            "grows"
+        } else {
+            "does NOT grow monotonically"
+        },
+        snaps
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// The clamps' twist conventions against the paper's sequence.
+fn conventions_section(r: &Reproduction) -> String {
+    let lk = r.spec.landscape_l_k_bar;
+    let rows = r.conventions.iter().map(|c| {
+        let cps: Vec<String> = (c.critical_points.iter())
+            .map(|(t, st)| format!("{t:.3} {}", if *st { "s" } else { "u" }))
+            .collect();
+        let folds: Vec<String> = c.folds.iter().map(|f| format!("{:.2}", f.l_k_bar)).collect();
+        let listed = |v: Vec<String>| if v.is_empty() { "—".into() } else { v.join(", ") };
+        [
+            format!("`{:?}`", c.end_twist),
+            listed(cps),
+            listed(folds),
+            if c.matches_paper() { "yes" } else { "no" }.to_string(),
+            c.failure.clone().unwrap_or_default(),
+        ]
+    });
+    let points = format!("critical points at l̄_k = {lk} (θ, s: stable, u: unstable)");
+    format!(
+        "## Twist conventions of the clamps\n\n{CONVENTIONS}{}",
+        table(
+            &left(&["convention", &points, "folds (l̄_k)", "paper's sequence", "notes"]),
+            rows
+        )
+        .trim_end_matches('\n')
+    ) + "\n"
+}
+
+const SCHEMATIC: &str = "![braid and loop at θ = 0](simplified/schematic.svg)\n\n(a) The braid (strands A, B) and the \
+    equilibrium loop at θ = 0 with the clamp points and tangents; (b) the braid's ends seen down z at θ = 0 (open) and \
+    θ = 1 (filled).\n\n";
 
 const GEOMETRY: &str = "## Geometry (reconstruction of Fig. 12)
 
@@ -529,7 +545,7 @@ mod tests {
             ..ReproductionSpec::default()
         };
         let r = reproduce(&spec).expect("reproduction");
-        let doc = r.document();
+        let doc = r.document().expect("figures draw");
         for f in &doc.figures {
             assert!(f.file_name.ends_with(".svg"));
             assert!(
@@ -543,7 +559,7 @@ mod tests {
             doc.markdown
                 .contains("Three critical points, the outer two stable")
         );
-        assert_well_formed(&svg::landscape(&r.landscape));
-        assert_well_formed(&svg::bifurcation(&r.bifurcation, &[]));
+        assert_well_formed(&svg::landscape(&r.landscape).unwrap());
+        assert_well_formed(&svg::bifurcation(&r.bifurcation, &[]).unwrap());
     }
 }

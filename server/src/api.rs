@@ -7,13 +7,14 @@
 //! | `GET /metrics` | Prometheus text |
 //! | `GET /api/openapi.json`, `GET /api/docs` | OpenAPI document, Swagger UI (embedded, offline) |
 //! | `GET /api/presets` | the presets with their full definitions |
+//! | `GET /api/limits` | the limits below and the certification threshold |
 //! | `POST /api/sweeps` | submit (`Idempotency-Key` header honoured) |
 //! | `GET /api/sweeps`, `GET /api/sweeps/{id}` | list, detail (counts, progress, ETA) |
 //! | `POST /api/sweeps/{id}/pause`, `/resume`, `/cancel` | control |
 //! | `GET /api/sweeps/{id}/events` | server-sent progress events |
 //! | `GET /api/sweeps/{id}/phase-diagram` | inversion points of the sweep's cases |
-//! | `GET /api/cases/{id}`, `/series.csv`, `/frames` | a case, its series as CSV, its frames |
-//! | `GET /api/cases/{id}/frames.zip` | its frames for ParaView (`.pvd` over `.vtp` files, docs/PARAVIEW.md) |
+//! | `GET /api/cases/{id}`, `/series.csv`, `/snapshots` | a case, its series as CSV, its snapshots |
+//! | `GET /api/cases/{id}/snapshots.zip` | its snapshots for ParaView (`.pvd` over `.vtp` files, docs/PARAVIEW.md) |
 //!
 //! Limits: request bodies of at most [`Limits::max_body_bytes`] (413 beyond),
 //! at most [`Limits::max_cases`] cases per sweep (422 beyond). With a token
@@ -21,7 +22,7 @@
 //! needs `Authorization: Bearer <token>` (401 otherwise).
 use crate::core::Core;
 use crate::error::{ApiError, ErrorBody};
-use crate::extract::{Id, Page, Paging, Submission};
+use crate::extract::{Id, MAX_PAGE, Page, Paging, Submission};
 use crate::spec::{FieldError, Limits, Preset, SweepSpec};
 use crate::views::*;
 use axum::extract::{DefaultBodyLimit, FromRef, Path, Request, State};
@@ -70,6 +71,7 @@ pub fn router(app: App) -> Router {
         .route("/healthz", get(healthz))
         .route("/metrics", get(metrics))
         .route("/api/presets", get(list_presets))
+        .route("/api/limits", get(get_limits))
         .route("/api/sweeps", post(submit_sweep).get(list_sweeps))
         .route("/api/sweeps/{id}", get(get_sweep))
         .route("/api/sweeps/{id}/cases", get(sweep_cases))
@@ -80,8 +82,8 @@ pub fn router(app: App) -> Router {
         .route("/api/sweeps/{id}/phase-diagram", get(phase_diagram))
         .route("/api/cases/{id}", get(get_case))
         .route("/api/cases/{id}/series.csv", get(case_series_csv))
-        .route("/api/cases/{id}/frames", get(case_frames))
-        .route("/api/cases/{id}/frames.zip", get(case_frames_zip))
+        .route("/api/cases/{id}/snapshots", get(case_snapshots))
+        .route("/api/cases/{id}/snapshots.zip", get(case_snapshots_zip))
         .route("/api/cases/{id}/figures/{figure}", get(case_figure))
         .route("/api/sweeps/{id}/figures/{figure}", get(sweep_figure))
         .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
@@ -108,18 +110,18 @@ pub fn openapi() -> OpenApiDoc {
         description = "Sweeps of overhand-knot tightening simulations (\"Snap buckling of overhand knots\"): \
             submit a base case and a grid (or a preset reproducing the paper's Figs 7, 9, 11), follow the \
             progress and download the phase diagram (inversion point per case). \n\n\
-            Limits: request bodies of at most 64 KiB by default (413), at most 1000 cases per sweep by default \
-            (422), parameter ranges as documented on CaseParams (422 with the field and reason). With \
-            KNOTSWEEP_TOKEN set on the server, POST requests need `Authorization: Bearer <token>` (401)."
+            Limits: request bodies and cases per sweep as `GET /api/limits` serves them (413, 422), parameter \
+            ranges as documented on CaseParams (422 with the field and reason). With KNOTSWEEP_TOKEN set on the \
+            server, POST requests need `Authorization: Bearer <token>` (401)."
     ),
     paths(
         submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
-        phase_diagram, get_case, case_series_csv, case_frames, case_frames_zip, list_presets, healthz, metrics
+        phase_diagram, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, healthz, metrics
     ),
     components(schemas(
         SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
         SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
-        LogLineView, Health, SweepEvent, RunningCase
+        LogLineView, Health, SweepEvent, RunningCase, ServiceLimits
     )),
     modifiers(&Extras),
     tags(
@@ -157,6 +159,7 @@ async fn auth(State(app): State<App>, request: Request, next: Next) -> Response 
         let given = request
             .headers()
             .get(header::AUTHORIZATION)
+            // A value that is not visible ASCII holds no valid token: 401 as without one.
             .and_then(|v| v.to_str().ok())
             .and_then(bearer_token);
         if !given.is_some_and(|t| constant_time_eq(t.as_bytes(), token.as_bytes())) {
@@ -247,7 +250,7 @@ async fn healthz(State(app): State<App>) -> (StatusCode, Json<Health>) {
 }
 
 /// Prometheus metrics: `knotsweep_cases{status}`, `knotsweep_queue_depth`,
-/// `knotsweep_sweeps{state}`, `knotsweep_claims_total`,
+/// `knotsweep_sweeps{status}`, `knotsweep_claims_total`,
 /// `knotsweep_completions_total{outcome}`, `knotsweep_case_duration_seconds`
 /// (histogram), retries, failures, lost leases, queue overhead.
 #[utoipa::path(get, path = "/metrics", tag = "service",
@@ -267,17 +270,24 @@ async fn list_presets() -> Json<Vec<Preset>> {
     Json(crate::spec::presets())
 }
 
+/// The service's limits (cases per sweep, body size, name and key lengths,
+/// page size) and the certification threshold.
+#[utoipa::path(get, path = "/api/limits", tag = "service", responses((status = 200, body = ServiceLimits)))]
+async fn get_limits(State(app): State<App>) -> Json<ServiceLimits> {
+    Json(ServiceLimits::new(app.core.limits(), MAX_PAGE))
+}
+
 /// Submit a sweep: a base case plus a grid, or a preset.
 ///
 /// Every case parameter is optional (paper defaults); `grid` lists values for
-/// any parameters (cartesian product, at most 1000 cases by default). A case
+/// any parameters (cartesian product, at most `max_cases` of `GET /api/limits`). A case
 /// already computed (same parameters and solver version) is reused at once
 /// (`cached: true`). With an `Idempotency-Key` seen before and the same body,
 /// the first sweep is returned (200, `replayed: true`); with a different body,
 /// 409.
 #[utoipa::path(post, path = "/api/sweeps", tag = "sweeps",
-    request_body(content = SweepSpec, description = "At most 64 KiB (default limit)"),
-    params(("Idempotency-Key" = Option<String>, Header, description = "Makes retried submissions return the first sweep (1-200 printable ASCII characters)")),
+    request_body(content = SweepSpec, description = "At most `max_body_bytes` of `GET /api/limits`"),
+    params(("Idempotency-Key" = Option<String>, Header, description = "Makes retried submissions return the first sweep (printable ASCII, at most `max_idempotency_key_chars` of `GET /api/limits`)")),
     responses(
         (status = 201, description = "Accepted", body = SubmitResponse),
         (status = 200, description = "Idempotent replay of an earlier submission", body = SubmitResponse),
@@ -446,7 +456,7 @@ fn attachment(content_type: &'static str, filename: &str, body: impl IntoRespons
         .into_response()
 }
 
-/// `{id}` and a figure name `f_bar.svg` or `h_bar.svg` from the path.
+/// `{id}` and a figure name `F_bar.svg` or `H_bar.svg` from the path.
 fn figure_path(id: &str, figure: &str) -> Result<(i64, Quantity), ApiError> {
     let id = id
         .parse()
@@ -458,7 +468,7 @@ fn figure_path(id: &str, figure: &str) -> Result<(i64, Quantity), ApiError> {
             ApiError::new(
                 StatusCode::NOT_FOUND,
                 "not_found",
-                "figures: f_bar.svg, h_bar.svg",
+                "figures: F_bar.svg, H_bar.svg",
                 vec![],
             )
         })?;
@@ -471,7 +481,7 @@ fn svg(text: String) -> Response {
 
 /// F bar or H bar against l_k bar of a case as SVG (the figure of `knotsweep run --plot`).
 #[utoipa::path(get, path = "/api/cases/{id}/figures/{figure}", tag = "cases",
-    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg or h_bar.svg")),
+    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg or H_bar.svg")),
     responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
 async fn case_figure(
     State(app): State<App>,
@@ -484,7 +494,7 @@ async fn case_figure(
 /// F bar or H bar against l_k bar of every finished case of a sweep, overlaid,
 /// or the phase diagram with the simplified model's line, as SVG.
 #[utoipa::path(get, path = "/api/sweeps/{id}/figures/{figure}", tag = "sweeps",
-    params(("id" = i64, Path), ("figure" = String, Path, description = "f_bar.svg, h_bar.svg or phase.svg")),
+    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg, H_bar.svg or phase.svg")),
     responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
 async fn sweep_figure(
     State(app): State<App>,
@@ -500,25 +510,26 @@ async fn sweep_figure(
     Ok(svg(app.core.sweep_figure(id, quantity).await?))
 }
 
-/// Centreline snapshots of a case (`[{label, l_k_bar, points: [[x, y, z], ...]}]`).
-#[utoipa::path(get, path = "/api/cases/{id}/frames", tag = "cases", params(("id" = i64, Path)),
-    responses((status = 200, description = "JSON array of frames", content_type = "application/json"),
+/// The snapshots of a case: its knot's states kept for viewers
+/// (`[{label, l_k_bar, time, points: [[x, y, z], ...], ...}]`).
+#[utoipa::path(get, path = "/api/cases/{id}/snapshots", tag = "cases", params(("id" = i64, Path)),
+    responses((status = 200, description = "JSON array of snapshots", content_type = "application/json"),
         (status = 404, body = ErrorBody)))]
-async fn case_frames(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
-    let json = app.core.frames(id).await?;
+async fn case_snapshots(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let json = app.core.snapshots(id).await?;
     Ok(([(header::CONTENT_TYPE, "application/json")], json).into_response())
 }
 
-/// The frames for ParaView: a zip of `case-{id}.pvd` and, per frame in time order, the centre line and the contacts
+/// The snapshots for ParaView: a zip of `case-{id}.pvd` and, per snapshot in time order, the centre line and the contacts
 /// as VTK XML PolyData (`case-{id}/centreline_NNN.vtp`, `case-{id}/contacts_NNN.vtp`; docs/PARAVIEW.md).
-#[utoipa::path(get, path = "/api/cases/{id}/frames.zip", tag = "cases", params(("id" = i64, Path)),
+#[utoipa::path(get, path = "/api/cases/{id}/snapshots.zip", tag = "cases", params(("id" = i64, Path)),
     responses((status = 200, description = "zip of a .pvd and its .vtp files", content_type = "application/zip"),
         (status = 404, body = ErrorBody)))]
-async fn case_frames_zip(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
-    let zip = app.core.frames_zip(id).await?;
+async fn case_snapshots_zip(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let zip = app.core.snapshots_zip(id).await?;
     Ok(attachment(
         "application/zip",
-        &format!("case-{id}-frames.zip"),
+        &format!("case-{id}-snapshots.zip"),
         zip,
     ))
 }

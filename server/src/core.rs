@@ -14,7 +14,7 @@ use knotsweep_worker::store::{
 use report::charts::{self, CaseCurve, Quantity};
 use serde_json::Value;
 use solver::measurements::Sample;
-use solver::protocol::Frame;
+use solver::protocol::Snapshot;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -127,7 +127,7 @@ impl Core {
         let cases = self.store.sweep_cases(record.id).await?;
         Ok(SubmitResponse {
             replayed,
-            sweep: SweepDetail::from((&record, &cases[..])),
+            sweep: SweepDetail::new(&record, &cases)?,
         })
     }
 
@@ -179,7 +179,7 @@ impl Core {
     pub async fn sweep(&self, id: i64) -> Result<SweepDetail, CoreError> {
         let record = self.record(id).await?;
         let cases = self.store.sweep_cases(id).await?;
-        Ok(SweepDetail::from((&record, &cases[..])))
+        Ok(SweepDetail::new(&record, &cases)?)
     }
 
     /// The sweep's progress as a stream: an update whenever it changes (polled
@@ -223,24 +223,25 @@ impl Core {
             "sweep control"
         );
         let cases = self.store.sweep_cases(id).await?;
-        Ok(SweepDetail::from((&record, &cases[..])))
+        Ok(SweepDetail::new(&record, &cases)?)
     }
 
     pub async fn phase_diagram(&self, id: i64) -> Result<PhaseDiagram, CoreError> {
         let record = self.record(id).await?;
         let cases = self.store.sweep_cases(id).await?;
-        let spec: SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
-        let base = spec::base_params(&spec)
-            .map(|p| serde_json::to_value(p).expect("params serialise"))
-            .unwrap_or(Value::Null);
-        let (points, _) = views::points(&record, &cases);
+        let spec = views::stored_spec(&record)?;
+        let base = spec::base_params(&spec).map_err(|e| {
+            knotsweep_worker::StoreError::Corrupt(format!("sweep {id}'s stored base parameters: {e}"))
+        })?;
+        let base = serde_json::to_value(base).expect("params serialise");
+        let (points, _) = views::points(&record, &cases)?;
         let simplified = futures_util::future::join_all(
             points
                 .iter()
                 .map(|p| self.simplified_snap(p.case.case.params.n, p.case.case.params.h)),
         )
         .await;
-        Ok(PhaseDiagram::new(&record, &cases, base, simplified))
+        Ok(PhaseDiagram::new(&record, &cases, base, simplified)?)
     }
 
     /// The phase diagram as SVG: critical l_k bar against the first varied
@@ -301,14 +302,21 @@ impl Core {
             .clone();
         *cell
             .get_or_init(|| async move {
-                tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
+                // A failure leaves the point without its reference line (the
+                // field is null), logged here with its reason.
+                match tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
                     .await
-                    .ok()
-                    .and_then(|r| {
-                        r.map_err(|e| tracing::warn!(n, h, error = %e, "simplified model failed"))
-                            .ok()
-                    })
-                    .flatten()
+                {
+                    Ok(Ok(snap)) => snap,
+                    Ok(Err(e)) => {
+                        tracing::warn!(n, h, error = %e, "simplified model failed");
+                        None
+                    }
+                    Err(e) => {
+                        tracing::error!(n, h, error = %e, "simplified model panicked");
+                        None
+                    }
+                }
             })
             .await
     }
@@ -323,11 +331,9 @@ impl Core {
     pub async fn case(&self, id: i64) -> Result<CaseDetail, CoreError> {
         let c = self.case_record(id).await?;
         let sweeps = self.store.case_sweeps(id).await?;
-        let series = match self.store.case_series_json(id).await? {
-            Some(text) => Some(
-                serde_json::from_str(&text)
-                    .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?,
-            ),
+        // Read as samples, so that a series stored under older names is served under today's.
+        let series = match c.result {
+            Some(_) => Some(serde_json::to_value(self.series(&c).await?).expect("samples serialise")),
             None => None,
         };
         let logs = self.store.case_logs(id).await?;
@@ -366,7 +372,7 @@ impl Core {
         let mut loaded = Vec::new();
         // The sweep's case rows already hold their result summaries: only the series are read.
         let cases = self.store.sweep_cases(id).await?;
-        for point in views::points(&record, &cases).0 {
+        for point in views::points(&record, &cases)?.0 {
             let s = point.case;
             if s.case.result.is_some() {
                 let label = SweepCaseView::from((s, &record.varied[..]))
@@ -394,33 +400,33 @@ impl Core {
             .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
-    /// The frames (centreline snapshots) as stored JSON; 404 before the result.
-    pub async fn frames(&self, id: i64) -> Result<String, CoreError> {
+    /// The snapshots as stored JSON; 404 before the result.
+    pub async fn snapshots(&self, id: i64) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
-        self.frames_of(&c).await
+        self.snapshots_of(&c).await
     }
 
-    /// The stored frames JSON of case `c`; 404 before its result.
-    async fn frames_of(&self, c: &CaseRecord) -> Result<String, CoreError> {
+    /// The stored snapshots JSON of case `c`; 404 before its result.
+    async fn snapshots_of(&self, c: &CaseRecord) -> Result<String, CoreError> {
         let id = c.id;
         self.store
-            .case_frames_json(id)
+            .case_snapshots_json(id)
             .await?
             .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))
     }
 
-    /// The frames as ParaView files (`report::vtk`: `case-{id}.pvd` over
+    /// The snapshots as ParaView files (`report::vtk`: `case-{id}.pvd` over
     /// `case-{id}/*.vtp`) in a zip archive; 404 before the result.
-    /// Parsing the frames (about 1.4 MB of JSON at K = 301) and writing the
+    /// Parsing the snapshots (about 1.4 MB of JSON at K = 301) and writing the
     /// archive run on the blocking pool, not on the async workers.
-    pub async fn frames_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
+    pub async fn snapshots_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
         let c = self.case_record(id).await?;
-        let json = self.frames_of(&c).await?;
+        let json = self.snapshots_of(&c).await?;
         let h = c.params.h;
         tokio::task::spawn_blocking(move || {
-            let frames: Vec<Frame> = serde_json::from_str(&json)
+            let snapshots: Vec<Snapshot> = serde_json::from_str(&json)
                 .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
-            let files = report::vtk::case_files(&format!("case-{id}"), h, &frames);
+            let files = report::vtk::case_files(&format!("case-{id}"), h, &snapshots);
             zip_archive(&files).map_err(|e| CoreError::Figure(e.to_string()))
         })
         .await
@@ -505,14 +511,20 @@ fn new_sweep(spec: &SweepSpec, raw: &Value, expanded: Expanded, idempotency_key:
 }
 
 /// The sweep's cases: its points in grid order, then the refined twins not
-/// already among them ([`spec::points`] tells the two apart).
+/// already among them ([`spec::points`] tells the two apart), each point
+/// holding its twin's position.
 fn with_twins(points: Vec<spec::GridCase>, twins: Vec<solver::case::CaseParams>) -> Vec<NewCase> {
     let mut cases: Vec<NewCase> = points.into_iter().map(|c| NewCase::new(c.params)).collect();
-    for twin in twins {
+    for (point, twin) in twins.into_iter().enumerate() {
         let twin = NewCase::new(twin);
-        if !cases.iter().any(|c| c.key == twin.key) {
-            cases.push(twin);
-        }
+        let position = match cases.iter().position(|c| c.key == twin.key) {
+            Some(position) => position,
+            None => {
+                cases.push(twin);
+                cases.len() - 1
+            }
+        };
+        cases[point].twin_position = Some(position);
     }
     cases
 }
@@ -549,7 +561,13 @@ impl EventState {
                         _ = tokio::time::sleep(self.interval) => {}
                         _ = self.shutdown.changed() => return None,
                     }
-                    self.core.sweep(self.id).await.ok()?
+                    match self.core.sweep(self.id).await {
+                        Ok(detail) => detail,
+                        Err(e) => {
+                            tracing::warn!(sweep_id = self.id, error = %e, "event stream ended: the sweep cannot be read");
+                            return None;
+                        }
+                    }
                 }
             };
             let event = SweepEvent::from(&detail);

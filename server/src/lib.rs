@@ -45,7 +45,7 @@ pub struct ServerConfig {
     pub database_url: String,
     /// Embedded worker slots: `None` one per core, `Some(0)` none.
     pub workers: Option<usize>,
-    /// Lease length of the embedded workers (heartbeat: a third of it).
+    /// Lease length of the embedded workers (`PoolConfig::heartbeat`).
     pub lease: Duration,
     /// Idle poll interval of the embedded workers.
     pub poll: Duration,
@@ -64,10 +64,10 @@ impl Default for ServerConfig {
         Self {
             database_url: DEFAULT_DATABASE_URL.to_string(),
             workers: None,
-            lease: Duration::from_secs(30),
-            poll: Duration::from_millis(250),
-            retry: RetryPolicy::default(),
-            limits: Limits::default(),
+            lease: knotsweep_worker::pool::DEFAULT_LEASE,
+            poll: knotsweep_worker::pool::DEFAULT_POLL,
+            retry: RetryPolicy::DEFAULT,
+            limits: Limits::DEFAULT,
             token: None,
             events_interval: Duration::from_millis(500),
             header_read_timeout: http::HEADER_READ_TIMEOUT,
@@ -170,9 +170,13 @@ impl RunningServer {
     /// event streams, stop the embedded workers (releasing their leases so
     /// the cases are queued again at once) and close the database.
     pub async fn shutdown(self) -> anyhow::Result<()> {
+        // Fails only when every receiver (the accept loop, the reaper, the
+        // event streams) has already ended.
         let _ = self.shutdown.send(true);
         let served = self.http.await;
-        let _ = self.reaper.await;
+        if let Err(e) = self.reaper.await {
+            tracing::error!(error = %e, "the lease reaper ended abnormally");
+        }
         if let Some(pool) = self.pool {
             pool.shutdown().await;
         }

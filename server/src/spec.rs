@@ -8,8 +8,8 @@ use solver::case::CaseParams;
 use std::collections::BTreeMap;
 use utoipa::ToSchema;
 
-/// The limits of a submission. Defaults: 1000 cases per sweep, 64 KiB bodies,
-/// names of at most 200 characters, idempotency keys of at most 200 characters.
+/// The limits of a submission ([`Limits::DEFAULT`] unless `serve` is told
+/// otherwise); `GET /api/limits` serves them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
     /// Largest number of cases (the product of the grid's list lengths).
@@ -22,14 +22,20 @@ pub struct Limits {
     pub max_idempotency_key_len: usize,
 }
 
+impl Limits {
+    /// 1000 cases per sweep, 64 KiB bodies, names and idempotency keys of at
+    /// most 200 characters.
+    pub const DEFAULT: Self = Self {
+        max_cases: 1000,
+        max_body_bytes: 64 * 1024,
+        max_name_len: 200,
+        max_idempotency_key_len: 200,
+    };
+}
+
 impl Default for Limits {
     fn default() -> Self {
-        Self {
-            max_cases: 1000,
-            max_body_bytes: 64 * 1024,
-            max_name_len: 200,
-            max_idempotency_key_len: 200,
-        }
+        Self::DEFAULT
     }
 }
 
@@ -112,7 +118,7 @@ fn numbers(values: &[f64]) -> Vec<Value> {
 /// high).
 pub fn presets() -> Vec<Preset> {
     let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
-        let base = base.as_object().cloned().unwrap_or_default();
+        let base = base.as_object().cloned().expect("a preset's base is an object");
         let base_params: CaseParams =
             serde_json::from_value(Value::Object(base.clone())).expect("preset base is valid");
         let cases = values.len();
@@ -186,8 +192,8 @@ pub fn points(spec: &SweepSpec) -> usize {
 }
 
 /// The full parameters of a spec's base (preset base, then the given base),
-/// or `None` if they do not parse.
-pub fn base_params(spec: &SweepSpec) -> Option<CaseParams> {
+/// or why they do not parse.
+pub fn base_params(spec: &SweepSpec) -> Result<CaseParams, serde_json::Error> {
     let mut base = spec
         .preset
         .as_deref()
@@ -197,7 +203,7 @@ pub fn base_params(spec: &SweepSpec) -> Option<CaseParams> {
     if let Some(given) = &spec.base {
         base.extend(given.clone());
     }
-    serde_json::from_value(Value::Object(base)).ok()
+    serde_json::from_value(Value::Object(base))
 }
 
 /// Names of `CaseParams`'s fields (`solver::case::param_names`).

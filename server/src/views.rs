@@ -8,7 +8,7 @@
 //! The views are built here from the store's records (`From` impls and
 //! constructors), so the core only gathers the records.
 use knotsweep_worker::store::{
-    CaseRecord, CaseState, LogLine, ResultSummary, SweepCase, SweepRecord, SweepState,
+    CaseRecord, CaseState, LogLine, ResultSummary, StoreError, SweepCase, SweepRecord, SweepState,
 };
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -39,6 +39,7 @@ pub struct InversionPoint {
     /// l_k bar = (L - l_c) / h at the inversion.
     pub l_k_bar: f64,
     /// l_c / L at the inversion.
+    #[serde(rename = "l_c_over_L")]
     pub l_c_over_l: f64,
     /// F bar = F h^2 / EI just before the drop and its minimum just after.
     #[serde(rename = "F_bar_before")]
@@ -46,7 +47,9 @@ pub struct InversionPoint {
     #[serde(rename = "F_bar_after")]
     pub f_bar_after: f64,
     /// H bar before and after the drop.
+    #[serde(rename = "H_bar_before")]
     pub h_bar_before: f64,
+    #[serde(rename = "H_bar_after")]
     pub h_bar_after: f64,
     /// Peak kinetic energy around the drop over its median before it. With
     /// `F_bar_after >= F_bar_before` it tells a snap (tens) from a loop that
@@ -74,8 +77,44 @@ pub struct CaseProgress {
     /// Fraction of the pull done (0..1).
     pub fraction: f64,
     pub l_k_bar: f64,
+    #[serde(rename = "H_bar")]
     pub h_bar: f64,
     pub steps: u64,
+}
+
+/// What a client needs to know of the service's limits and thresholds
+/// (`GET /api/limits`), so that the web page and the Python client never
+/// write them again.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ServiceLimits {
+    /// Largest number of cases in a sweep, a certified sweep's refined twins
+    /// included (422 beyond).
+    pub max_cases: usize,
+    /// Largest request body in bytes (413 beyond).
+    pub max_body_bytes: usize,
+    /// Longest sweep name (characters).
+    pub max_name_chars: usize,
+    /// Longest `Idempotency-Key` (characters).
+    pub max_idempotency_key_chars: usize,
+    /// Largest `limit` of a page of a list (`GET /api/sweeps`, `GET /api/sweeps/{id}/cases`).
+    pub max_page: usize,
+    /// A certified point is converged when its relative uncertainty is at
+    /// most this (`solver::certify::CONVERGED_WITHIN`).
+    pub converged_within: f64,
+}
+
+impl ServiceLimits {
+    /// The limits of `limits`, lists paged by at most `max_page`.
+    pub fn new(limits: &crate::spec::Limits, max_page: usize) -> Self {
+        Self {
+            max_cases: limits.max_cases,
+            max_body_bytes: limits.max_body_bytes,
+            max_name_chars: limits.max_name_len,
+            max_idempotency_key_chars: limits.max_idempotency_key_len,
+            max_page,
+            converged_within: solver::certify::CONVERGED_WITHIN,
+        }
+    }
 }
 
 /// A sweep in a list.
@@ -204,7 +243,7 @@ pub struct PhaseDiagram {
     pub points: Vec<PhasePoint>,
 }
 
-/// A stored result (without the series and frames).
+/// A stored result (without the series and snapshots).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct ResultView {
     /// The solver's status.
@@ -253,10 +292,11 @@ pub struct CaseDetail {
     /// Sweeps that asked for this case.
     pub sweeps: Vec<i64>,
     pub result: Option<ResultView>,
-    /// The tightening series (one object per sample: time, l_k_bar,
-    /// l_c_over_l, force, f_bar, width, height, h_bar, kinetic_energy (peak since the previous sample),
-    /// contacts, active_contacts, max_penetration_over_h, epsilon, phi, newton_iterations, dt), null
-    /// before the result.
+    /// The tightening series (one object per sample, named as the columns of
+    /// `series.csv`: time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar,
+    /// kinetic_energy (peak since the previous sample), contacts,
+    /// active_contacts, max_penetration_over_h, epsilon, phi,
+    /// newton_iterations, dt), null before the result.
     #[schema(value_type = Option<Vec<Object>>)]
     pub series: Option<Value>,
     pub logs: Vec<LogLineView>,
@@ -469,33 +509,57 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
 }
 
 /// A sweep's point (one of its first [`crate::spec::points`] cases) and, in a
-/// certified sweep, its refined twin ([`solver::certify::refined`], found by
-/// its cache key among the sweep's cases).
+/// certified sweep, its refined twin ([`solver::certify::refined`]).
 pub struct Point<'a> {
     pub case: &'a SweepCase,
     pub twin: Option<&'a SweepCase>,
 }
 
-/// The points of a sweep of `cases` (in position order) and whether it is certified.
-pub fn points<'a>(record: &SweepRecord, cases: &'a [SweepCase]) -> (Vec<Point<'a>>, bool) {
-    let spec: crate::spec::SweepSpec = serde_json::from_value(record.spec.clone()).unwrap_or_default();
+/// The sweep's stored specification; `Corrupt` when it no longer parses.
+pub fn stored_spec(record: &SweepRecord) -> Result<crate::spec::SweepSpec, StoreError> {
+    serde_json::from_value(record.spec.clone())
+        .map_err(|e| StoreError::Corrupt(format!("sweep {}'s stored specification: {e}", record.id)))
+}
+
+/// The points of a sweep of `cases` (in position order) and whether it is
+/// certified. A point's twin is the case at the position stored with the
+/// point at submission; in a certified sweep stored before that relation
+/// was, the case with the point's refined parameters (never its cache key,
+/// which changes with the physics revision).
+pub fn points<'a>(
+    record: &SweepRecord,
+    cases: &'a [SweepCase],
+) -> Result<(Vec<Point<'a>>, bool), StoreError> {
+    let spec = stored_spec(record)?;
     let count = crate::spec::points(&spec);
     let certified = spec.certify == Some(true);
-    let by_key: HashMap<&str, &SweepCase> = match certified {
-        true => cases.iter().map(|c| (c.case.key.as_str(), c)).collect(),
+    let at: HashMap<i64, &SweepCase> = cases.iter().map(|c| (c.position, c)).collect();
+    let unrelated = certified && cases.iter().all(|c| c.twin_position.is_none());
+    let by_params: HashMap<String, &SweepCase> = match unrelated {
+        true => (cases.iter())
+            .map(|c| (knotsweep_worker::key::canonical_json(&c.case.params), c))
+            .collect(),
         false => HashMap::new(),
+    };
+    let twin = |case: &SweepCase| match case.twin_position {
+        Some(position) => at.get(&position).copied(),
+        None if unrelated => {
+            let refined = solver::certify::refined(&case.case.params);
+            by_params
+                .get(&knotsweep_worker::key::canonical_json(&refined))
+                .copied()
+        }
+        None => None,
     };
     let points = cases
         .iter()
         .filter(|c| (c.position as usize) < count)
         .map(|case| Point {
             case,
-            twin: certified
-                .then(|| knotsweep_worker::key::case_key(&solver::certify::refined(&case.case.params)))
-                .and_then(|key| by_key.get(key.as_str()).copied()),
+            twin: twin(case),
         })
         .collect();
-    (points, certified)
+    Ok((points, certified))
 }
 
 /// The numerical uncertainty of a certified point: its refined twin's
@@ -510,7 +574,7 @@ pub struct UncertaintyView {
     pub absolute: Option<f64>,
     /// `absolute` over the point's l_k bar.
     pub relative: Option<f64>,
-    /// `relative` <= 2 % (`solver::certify::CONVERGED_WITHIN`); false when
+    /// `relative` at most `converged_within` (`GET /api/limits`); false when
     /// only one of the two inverted; null until both have a result.
     pub converged: Option<bool>,
 }
@@ -544,8 +608,9 @@ fn status_counts(cases: &[SweepCase]) -> BTreeMap<String, i64> {
     counts
 }
 
-impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
-    fn from((record, cases): (&SweepRecord, &[SweepCase])) -> Self {
+impl SweepDetail {
+    /// The detail of a sweep from its record and its cases (in position order).
+    pub fn new(record: &SweepRecord, cases: &[SweepCase]) -> Result<Self, StoreError> {
         let counts = status_counts(cases);
         let total = cases.len().max(1) as f64;
         let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
@@ -559,30 +624,28 @@ impl From<(&SweepRecord, &[SweepCase])> for SweepDetail {
             SweepStatus::Running | SweepStatus::Queued => eta(cases),
             _ => None,
         };
-        Self {
+        // Twin case id -> its point's (a twin that is itself a point is listed as a point).
+        let (points, _) = points(record, cases)?;
+        let is_point: HashSet<i64> = points.iter().map(|p| p.case.case.id).collect();
+        let twin_of: HashMap<i64, i64> = (points.iter())
+            .filter_map(|p| Some((p.twin?.case.id, p.case.case.id)))
+            .filter(|(twin, _)| !is_point.contains(twin))
+            .collect();
+        Ok(Self {
             varied: record.varied.clone(),
             spec: record.spec.clone(),
             progress: ((finished + running_done) / total).clamp(0.0, 1.0),
             eta_seconds,
             cached: cases.iter().filter(|c| c.cached).count() as i64,
-            cases: {
-                // Twin case id -> its point's (a twin that is itself a point is listed as a point).
-                let (points, _) = points(record, cases);
-                let is_point: HashSet<i64> = points.iter().map(|p| p.case.case.id).collect();
-                let twin_of: HashMap<i64, i64> = (points.iter())
-                    .filter_map(|p| Some((p.twin?.case.id, p.case.case.id)))
-                    .filter(|(twin, _)| !is_point.contains(twin))
-                    .collect();
-                cases
-                    .iter()
-                    .map(|c| SweepCaseView {
-                        twin_of: twin_of.get(&c.case.id).copied(),
-                        ..SweepCaseView::from((c, &record.varied[..]))
-                    })
-                    .collect()
-            },
+            cases: cases
+                .iter()
+                .map(|c| SweepCaseView {
+                    twin_of: twin_of.get(&c.case.id).copied(),
+                    ..SweepCaseView::from((c, &record.varied[..]))
+                })
+                .collect(),
             summary,
-        }
+        })
     }
 }
 
@@ -653,7 +716,7 @@ impl CaseDetail {
         let links = BTreeMap::from([
             ("self".to_string(), format!("/api/cases/{id}")),
             ("series_csv".to_string(), format!("/api/cases/{id}/series.csv")),
-            ("frames".to_string(), format!("/api/cases/{id}/frames")),
+            ("snapshots".to_string(), format!("/api/cases/{id}/snapshots")),
         ]);
         Self {
             id,
@@ -684,9 +747,14 @@ impl CaseDetail {
 impl PhaseDiagram {
     /// The phase diagram of a sweep: `base` its full base parameters,
     /// `simplified` the simplified model's snap for each point (grid order).
-    pub fn new(record: &SweepRecord, cases: &[SweepCase], base: Value, simplified: Vec<Option<f64>>) -> Self {
-        let (points, certified) = points(record, cases);
-        Self {
+    pub fn new(
+        record: &SweepRecord,
+        cases: &[SweepCase],
+        base: Value,
+        simplified: Vec<Option<f64>>,
+    ) -> Result<Self, StoreError> {
+        let (points, certified) = points(record, cases)?;
+        Ok(Self {
             sweep_id: record.id,
             name: record.name.clone(),
             preset: record.preset.clone(),
@@ -713,7 +781,7 @@ impl PhaseDiagram {
                     }
                 })
                 .collect(),
-        }
+        })
     }
 }
 
@@ -745,7 +813,7 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// Prometheus text exposition.
+    /// Prometheus text exposition (`let _ =`: writing to a `String` cannot fail).
     pub fn render(&self) -> String {
         let mut out = String::new();
         let _ = writeln!(
@@ -780,7 +848,7 @@ impl Metrics {
             let _ = writeln!(
                 out,
                 "knotsweep_sweeps{{status=\"{}\"}} {n}",
-                word.as_str().unwrap_or_default()
+                word.as_str().expect("a status is a word")
             );
         }
         let _ = writeln!(

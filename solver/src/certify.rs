@@ -2,11 +2,10 @@
 //! refined twin.
 //!
 //! The twin is the case with its (largest) time step halved: of the
-//! convergence study's refinements (docs/VALIDATION.md) it is the one that
-//! moves the n = 3 inversion most per unit of cost (dt halved 0.37 %, pull
-//! speed halved 0.00 %, contact tolerance x 1/100 0.00 %; K = 401 moves it
-//! 0.52 % but costs 2.4 times a case, dt halved 2 times), so that a certified
-//! sweep costs about 3 times an uncertified one.
+//! convergence study's refinements (docs/VALIDATION.md, the convergence rows)
+//! it is the one that moves the inversion most per unit of cost (a finer mesh
+//! also shrinks the step, with the square of the edge length, and costs more),
+//! so that a certified sweep costs about 3 times an uncertified one.
 use crate::case::CaseParams;
 use crate::measurements::Inversion;
 use serde::{Deserialize, Serialize};
@@ -109,7 +108,7 @@ mod tests {
         assert!((u.relative.unwrap() - 0.015).abs() < 1e-12);
         assert_eq!(u.converged, Some(true));
         let far = Uncertainty::new(Some(&at(100.0)), Some(Some(&at(97.0))));
-        assert_eq!(far.converged, Some(false), "3 % is above the 2 % threshold");
+        assert_eq!(far.converged, Some(false), "3 % is above the threshold");
         let lost = Uncertainty::new(Some(&at(100.0)), Some(None));
         assert_eq!((lost.absolute, lost.converged), (None, Some(false)));
         let neither = Uncertainty::new(None, Some(None));

@@ -6,8 +6,8 @@
 //! LDL^T), `contact` (Sec. 3.2), `pipeline` (one step), `knot` and
 //! `protocol` with `measurements` (Sec. 4), `simplified` (Sec. 5); `case`
 //! defines a case's parameters and validates them, `certify` a case's
-//! refined twin and the uncertainty it gives; `frame` holds the
-//! snapshots a report keeps for viewers. Pure computation: no I/O,
+//! refined twin and the uncertainty it gives; `snapshot` holds the
+//! states of the knot a report keeps for viewers. Pure computation: no I/O,
 //! deterministic for given inputs.
 pub mod case;
 pub mod certify;
@@ -15,7 +15,6 @@ pub mod contact;
 pub mod counters;
 pub mod energies;
 pub mod external;
-pub mod frame;
 pub mod knot;
 pub mod linalg;
 pub mod material;
@@ -24,6 +23,7 @@ pub mod pipeline;
 pub mod protocol;
 pub mod rod;
 pub mod simplified;
+pub mod snapshot;
 pub mod stepper;
 pub mod time_step;
 pub mod validation;

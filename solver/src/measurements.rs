@@ -28,19 +28,27 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
-/// One sample of the tightening series.
+/// One sample of the tightening series. Its JSON names are the paper's
+/// symbols, as in the CSV ([`COLUMNS`]); the aliases read series stored
+/// before they were.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
     /// Simulated time since the pull started (s).
     pub time: f64,
     pub l_k_bar: f64,
+    #[serde(rename = "l_c_over_L", alias = "l_c_over_l")]
     pub l_c_over_l: f64,
     /// Traction force F (N) and F bar.
+    #[serde(rename = "F", alias = "force")]
     pub force: f64,
+    #[serde(rename = "F_bar", alias = "f_bar")]
     pub f_bar: f64,
     /// Loop width W and height H (m), H bar = H / W (0 when no braid is found).
+    #[serde(rename = "W", alias = "width")]
     pub width: f64,
+    #[serde(rename = "H", alias = "height")]
     pub height: f64,
+    #[serde(rename = "H_bar", alias = "h_bar")]
     pub h_bar: f64,
     /// Largest kinetic energy (J) over the steps since the previous sample, so
     /// that a snap shorter than the sampling interval is not missed.
@@ -83,7 +91,8 @@ pub enum Column {
 }
 
 /// The series' columns in order, by the names of the CSV header (and of
-/// the Python binding's arrays): one per `Sample` field.
+/// the Python binding's arrays), which are `Sample`'s JSON names: one per
+/// field.
 pub const COLUMNS: [(&str, Column); 19] = [
     ("time", Column::Real(|s| s.time)),
     ("l_k_bar", Column::Real(|s| s.l_k_bar)),
@@ -276,14 +285,18 @@ pub fn loop_geometry(points: &[Vector3<f64>], start: usize, end: usize) -> LoopG
 pub struct Inversion {
     /// l_k bar and l_c / L of the last sample before H bar drops.
     pub l_k_bar: f64,
+    #[serde(rename = "l_c_over_L", alias = "l_c_over_l")]
     pub l_c_over_l: f64,
     /// F bar just before the drop and its minimum just after.
     #[serde(rename = "F_bar_before")]
     pub f_bar_before: f64,
     #[serde(rename = "F_bar_after")]
     pub f_bar_after: f64,
-    /// H bar before and after the drop.
+    /// H bar before and after the drop (aliases: the names stored before
+    /// the paper's symbols were used).
+    #[serde(rename = "H_bar_before", alias = "h_bar_before")]
     pub h_bar_before: f64,
+    #[serde(rename = "H_bar_after", alias = "h_bar_after")]
     pub h_bar_after: f64,
     /// Peak kinetic energy around the drop over the median before it.
     pub kinetic_energy_ratio: f64,
@@ -428,12 +441,31 @@ mod tests {
         );
     }
 
-    /// The penetration column has one name, with its unit, in JSON and CSV.
+    /// Every quantity has one name in JSON and CSV (the paper's symbols:
+    /// `F_bar`, `H_bar`, `l_c_over_L`), and a series stored under the old
+    /// JSON names still reads.
     #[test]
-    fn penetration_has_one_name_in_json_and_csv() {
-        let json = serde_json::to_value(Sample::default()).unwrap();
-        assert!(json.get("max_penetration_over_h").is_some());
-        assert!(COLUMNS.iter().any(|(c, _)| *c == "max_penetration_over_h"));
+    fn each_quantity_has_one_name_in_json_and_csv() {
+        let sample = Sample {
+            l_c_over_l: 0.5,
+            force: 1.0,
+            f_bar: 2.0,
+            width: 3.0,
+            height: 4.0,
+            h_bar: 5.0,
+            ..Sample::default()
+        };
+        let json = serde_json::to_value(sample).unwrap();
+        let names: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
+        let mut columns: Vec<&str> = COLUMNS.iter().map(|(c, _)| *c).collect();
+        columns.sort();
+        let mut sorted = names.clone();
+        sorted.sort();
+        assert_eq!(sorted, columns);
+        let old = r#"{"time": 0, "l_k_bar": 0, "l_c_over_l": 0.5, "force": 1, "f_bar": 2, "width": 3,
+            "height": 4, "h_bar": 5, "kinetic_energy": 0, "contacts": 0, "active_contacts": 0,
+            "max_penetration_over_h": 0, "epsilon": 0, "phi": 0, "newton_iterations": 0, "dt": 0}"#;
+        assert_eq!(serde_json::from_str::<Sample>(old).unwrap(), sample);
     }
 
     #[test]

@@ -137,7 +137,7 @@ const SMEARED_SPAN: f64 = 5.0;
 /// `RESTART_BEFORE`).
 const CHECKPOINTS: usize = 24;
 
-pub use crate::frame::{Frame, FrameContact};
+pub use crate::snapshot::{Snapshot, SnapshotContact};
 
 /// Counts and timings of a run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -177,7 +177,10 @@ pub struct CaseReport {
     /// The inversion point, `None` when H bar never snapped.
     pub inversion: Option<Inversion>,
     pub series: Vec<Sample>,
-    pub frames: Vec<Frame>,
+    /// The knot's states kept for viewers (stored as `frames` before they
+    /// were called snapshots).
+    #[serde(alias = "frames")]
+    pub snapshots: Vec<Snapshot>,
     pub stats: Stats,
     /// The run's stages in order, with their steps (empty in reports stored
     /// before they were recorded).
@@ -287,7 +290,7 @@ impl CaseReport {
             start_twist: 0.0,
             inversion: None,
             series: Vec::new(),
-            frames: Vec::new(),
+            snapshots: Vec::new(),
             stats: Stats::default(),
             stages: Vec::new(),
             scaling: None,
@@ -319,20 +322,21 @@ pub struct Progress {
     /// Fraction of the pull done, from the start to the stop condition (0..1).
     pub fraction: f64,
     pub l_k_bar: f64,
+    #[serde(rename = "H_bar", alias = "h_bar")]
     pub h_bar: f64,
     pub steps: u64,
 }
 
 /// Penetration (fraction of h) that ends a case as `Penetrated`.
 const MAX_PENETRATION: f64 = 0.5;
-/// Frames kept around the newest sample for the inversion snapshots.
-const FRAME_HISTORY: usize = 40;
-/// Stored frames (the report's size budget, about 50 kB each at K = 301): one
-/// every `FRAME_SPACING` in l_k bar along the pull, and every
-/// `SNAP_FRAME_SPACING` within `SNAP_WINDOW` either side of the inversion, so
-/// that a viewer steps through the snap (about 40 frames in all).
-const FRAME_SPACING: f64 = 20.0;
-const SNAP_FRAME_SPACING: f64 = 2.0;
+/// Snapshots kept around the newest sample for those around the inversion.
+const SNAPSHOT_HISTORY: usize = 40;
+/// Stored snapshots (the report's size budget, about 50 kB each at K = 301):
+/// one every `SNAPSHOT_SPACING` in l_k bar along the pull, and every
+/// `SNAP_SNAPSHOT_SPACING` within `SNAP_WINDOW` either side of the inversion,
+/// so that a viewer steps through the snap (about 40 snapshots in all).
+const SNAPSHOT_SPACING: f64 = 20.0;
+const SNAP_SNAPSHOT_SPACING: f64 = 2.0;
 const SNAP_WINDOW: f64 = 10.0;
 /// Damping rate (1/s, over the case's time unit) while relaxing.
 const RELAX_DAMPING: f64 = 20.0;
@@ -537,10 +541,10 @@ struct Pull {
     axis: Vector3<f64>,
     start_l_k_bar: f64,
     next_sample: f64,
-    next_frame: f64,
-    /// After the inversion: the next dense frame and where the dense frames stop.
+    next_snapshot: f64,
+    /// After the inversion: the next dense snapshot and where the dense snapshots stop.
     after_snap: Option<(f64, f64)>,
-    history: VecDeque<Frame>,
+    history: VecDeque<Snapshot>,
     criteria: InversionCriteria,
     /// The loop's middle node, from the builder and then tracked from each sample's braid ends.
     mid: usize,
@@ -671,7 +675,7 @@ struct Checkpoint {
     clock: TimeStep,
     pull: Pull,
     series: usize,
-    frames: usize,
+    snapshots: usize,
 }
 
 impl<'a> Case<'a> {
@@ -757,8 +761,8 @@ impl<'a> Case<'a> {
         self.topology(&points, || "after relaxing".to_string())?;
         let at = self.l_k_bar();
         self.report
-            .frames
-            .push(Frame::capture(&self.world, "relaxed", at, self.clock.elapsed));
+            .snapshots
+            .push(Snapshot::capture(&self.world, "relaxed", at, self.clock.elapsed));
         Ok(())
     }
 
@@ -808,9 +812,9 @@ impl<'a> Case<'a> {
             axis,
             start_l_k_bar,
             next_sample: start_l_k_bar,
-            next_frame: start_l_k_bar - FRAME_SPACING,
+            next_snapshot: start_l_k_bar - SNAPSHOT_SPACING,
             after_snap: None,
-            history: VecDeque::with_capacity(FRAME_HISTORY),
+            history: VecDeque::with_capacity(SNAPSHOT_HISTORY),
             criteria: InversionCriteria::default(),
             mid: loop_middle,
             time: 0.0,
@@ -834,7 +838,7 @@ impl<'a> Case<'a> {
             }
             pull.next_sample = l_k_bar - self.params.sample_interval;
             let points = self.sample(&mut pull, &step, dt, l_k_bar);
-            self.keep_frames(&mut pull, l_k_bar);
+            self.keep_snapshots(&mut pull, l_k_bar);
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
             let stop_l = match (self.report.inversion, self.params.stop_after_inversion) {
                 (Some(inv), Some(margin)) => (inv.l_k_bar - margin).max(self.params.min_l_k_bar),
@@ -863,8 +867,8 @@ impl<'a> Case<'a> {
         self.determinant(det, || "at the end".to_string())?;
         let at = self.l_k_bar();
         self.report
-            .frames
-            .push(Frame::capture(&self.world, "final", at, self.clock.elapsed));
+            .snapshots
+            .push(Snapshot::capture(&self.world, "final", at, self.clock.elapsed));
         Ok(())
     }
 
@@ -969,7 +973,7 @@ impl<'a> Case<'a> {
             clock: self.clock.clone(),
             pull: pull.clone(),
             series: self.report.series.len(),
-            frames: self.report.frames.len(),
+            snapshots: self.report.snapshots.len(),
         }
     }
 
@@ -1023,7 +1027,7 @@ impl<'a> Case<'a> {
     }
 
     /// Back to checkpoint `c` of a fast approach, to pull through the snap:
-    /// the series and frames after it are dropped, and the knot settles
+    /// the series and snapshots after it are dropped, and the knot settles
     /// with the clamps held (the fast pull leaves it swinging) before the
     /// snap stage starts.
     fn restore(&mut self, c: Checkpoint, pull: &mut Pull) -> Result<(), Ending> {
@@ -1035,13 +1039,13 @@ impl<'a> Case<'a> {
         Ok(())
     }
 
-    /// The world, pull, series and frames back as they were at `c`.
+    /// The world, pull, series and snapshots back as they were at `c`.
     fn rewind(&mut self, c: Checkpoint, pull: &mut Pull) {
         self.world = c.world;
         self.clock = c.clock;
         *pull = c.pull;
         self.report.series.truncate(c.series);
-        self.report.frames.truncate(c.frames);
+        self.report.snapshots.truncate(c.snapshots);
         self.report.inversion = None;
     }
 
@@ -1103,72 +1107,79 @@ impl<'a> Case<'a> {
         points
     }
 
-    /// The frames a viewer steps through (`FRAME_SPACING` along the pull,
-    /// `SNAP_FRAME_SPACING` around the inversion); detects the inversion.
-    fn keep_frames(&mut self, pull: &mut Pull, l_k_bar: f64) {
-        if pull.history.len() == FRAME_HISTORY {
+    /// The snapshots a viewer steps through (`SNAPSHOT_SPACING` along the pull,
+    /// `SNAP_SNAPSHOT_SPACING` around the inversion); detects the inversion.
+    fn keep_snapshots(&mut self, pull: &mut Pull, l_k_bar: f64) {
+        if pull.history.len() == SNAPSHOT_HISTORY {
             pull.history.pop_front();
         }
-        pull.history
-            .push_back(Frame::capture(&self.world, "sample", l_k_bar, self.clock.elapsed));
+        pull.history.push_back(Snapshot::capture(
+            &self.world,
+            "sample",
+            l_k_bar,
+            self.clock.elapsed,
+        ));
         if self.report.inversion.is_none() {
             self.report.inversion = measurements::detect_inversion(&self.report.series, &pull.criteria);
             if let Some(inv) = self.report.inversion {
-                self.snap_frames(pull, inv.l_k_bar);
+                self.snap_snapshots(pull, inv.l_k_bar);
             }
         } else if let Some((next, end)) = pull.after_snap {
             if l_k_bar <= next && l_k_bar >= end {
-                self.report.frames.push(Frame::capture(
+                self.report.snapshots.push(Snapshot::capture(
                     &self.world,
                     "after_inversion",
                     l_k_bar,
                     self.clock.elapsed,
                 ));
-                pull.after_snap = Some((l_k_bar - SNAP_FRAME_SPACING, end));
+                pull.after_snap = Some((l_k_bar - SNAP_SNAPSHOT_SPACING, end));
             }
         }
-        if l_k_bar <= pull.next_frame {
-            self.report
-                .frames
-                .push(Frame::capture(&self.world, "pull", l_k_bar, self.clock.elapsed));
-            pull.next_frame = l_k_bar - FRAME_SPACING;
+        if l_k_bar <= pull.next_snapshot {
+            self.report.snapshots.push(Snapshot::capture(
+                &self.world,
+                "pull",
+                l_k_bar,
+                self.clock.elapsed,
+            ));
+            pull.next_snapshot = l_k_bar - SNAPSHOT_SPACING;
         }
     }
 
-    /// The frames either side of the inversion at `snap`, taken from the
+    /// The snapshots either side of the inversion at `snap`, taken from the
     /// history (the detection lags the snap).
-    fn snap_frames(&mut self, pull: &mut Pull, snap: f64) {
+    fn snap_snapshots(&mut self, pull: &mut Pull, snap: f64) {
         let mut stored: Vec<f64> = Vec::new();
         let mut offset = SNAP_WINDOW;
         while offset >= -SNAP_WINDOW {
             let label = if offset == 0.0 {
                 "at_inversion"
-            } else if offset == SNAP_FRAME_SPACING {
+            } else if offset == SNAP_SNAPSHOT_SPACING {
                 "before_inversion"
             } else if offset > 0.0 {
                 "near_inversion"
             } else {
                 "after_inversion"
             };
-            let distance = |f: &Frame| (f.l_k_bar - snap - offset).abs();
+            let distance = |f: &Snapshot| (f.l_k_bar - snap - offset).abs();
             let nearest = pull
                 .history
                 .iter()
                 .filter(|f| offset > 0.0 || f.l_k_bar <= snap)
                 .min_by(|a, b| distance(a).total_cmp(&distance(b)));
-            if let Some(f) = nearest.filter(|f| distance(f) < SNAP_FRAME_SPACING / 2.0) {
+            if let Some(f) = nearest.filter(|f| distance(f) < SNAP_SNAPSHOT_SPACING / 2.0) {
                 if !stored.contains(&f.l_k_bar) {
                     stored.push(f.l_k_bar);
-                    self.report.frames.push(Frame {
+                    self.report.snapshots.push(Snapshot {
                         label: label.to_string(),
                         ..f.clone()
                     });
                 }
             }
-            offset -= SNAP_FRAME_SPACING;
+            offset -= SNAP_SNAPSHOT_SPACING;
         }
         let lowest = stored.iter().copied().fold(snap, f64::min);
-        pull.after_snap = Some((lowest - SNAP_FRAME_SPACING, snap - SNAP_WINDOW));
+        pull.after_snap = Some((lowest - SNAP_SNAPSHOT_SPACING, snap - SNAP_WINDOW));
     }
 
     /// Stage 4: the report, with the ending's status and the run's statistics.
@@ -1211,8 +1222,8 @@ fn finish(
         report.inversion = None;
         let at = l_k_bar(&world, &report.params);
         report
-            .frames
-            .push(Frame::capture(&world, "failure", at, clock.elapsed));
+            .snapshots
+            .push(Snapshot::capture(&world, "failure", at, clock.elapsed));
     }
     report.stats.rejected_steps = clock.rejected;
     report.stats.smallest_dt = clock.smallest;
@@ -1225,8 +1236,43 @@ fn finish(
 
 #[cfg(test)]
 mod tests {
-    use super::{Protocol, Stage, Status, smeared_snap};
+    use super::{Case, CaseReport, Protocol, Stage, Status, build, smeared_snap};
+    use crate::case::CaseParams;
     use crate::measurements::Sample;
+
+    /// A contact solve that refuses its problem (here an over-relaxation
+    /// factor outside (0, 2)) ends the case as diverged with the solver's
+    /// reason, after the time step has been halved to its smallest.
+    #[test]
+    fn a_failed_contact_solve_ends_the_case_with_its_reason() {
+        let params = CaseParams {
+            n: 1,
+            length: 0.3,
+            nodes: 102,
+            relax_time: 0.1,
+            protocol: Protocol::Reference,
+            ..CaseParams::default()
+        };
+        let case = params.validated().expect("a valid case");
+        let mut report = CaseReport::empty(params.clone(), Status::Completed);
+        let mut world = build(&case, &mut report).expect("the knot builds");
+        world.contact.solver.relaxation = 2.5;
+        let mut run = Case::new(&params, report, world, std::time::Instant::now());
+        let ending = run
+            .relax()
+            .and_then(|()| run.pull(case.start().loop_middle, &mut |_, _| true))
+            .expect_err("the case cannot go on without its contact forces");
+        let report = run.finish(ending);
+        assert_eq!(report.status, Status::Diverged);
+        assert_eq!(
+            report.reason,
+            "while relaxing: contact solve failed: over-relaxation factor 2.5 is outside (0, 2)"
+        );
+        assert!(
+            report.stats.rejected_steps >= 6,
+            "the step is halved to dt/64 before the case ends"
+        );
+    }
 
     /// Samples every 0.5 in l_k bar from 300 down, H bar from `h`.
     fn series(h: impl Fn(f64) -> f64) -> Vec<Sample> {

@@ -112,6 +112,8 @@ impl TimeStep {
             let (report, penetration) = match world.step(dt) {
                 Ok(r) => (r, r.max_penetration / radius),
                 Err(e) if !can_shrink => return Err(e),
+                // Not dropped: the step is redone with half the step, and the
+                // error is returned once the step is at its smallest.
                 Err(_) => (WorldStepReport::default(), f64::INFINITY),
             };
             if can_shrink && penetration > o.reject_penetration {

@@ -222,6 +222,17 @@ impl Drop for Children {
     }
 }
 
+/// A prerequisite of the calling test is missing (an engine, a server, a
+/// Python module): with the environment variable `CI` set (CI sets it, and
+/// `.ci/run` installs every prerequisite) the test fails with `why`;
+/// elsewhere it is skipped, printing `why`. The caller returns after it.
+pub fn missing(why: &str) {
+    if std::env::var_os("CI").is_some_and(|v| !v.is_empty()) {
+        panic!("{why} (CI is set: a missing prerequisite fails the test instead of skipping it)");
+    }
+    println!("skipped: {why}");
+}
+
 /// The PostgreSQL server the tests may use: `KNOTSWEEP_TEST_POSTGRES`, default
 /// `postgres://postgres@127.0.0.1:5432/test` (CI's).
 pub fn test_postgres() -> String {
@@ -230,7 +241,7 @@ pub fn test_postgres() -> String {
 }
 
 /// A fresh database on the test PostgreSQL server: (its URL, the admin URL,
-/// its name), or why there is none (the caller skips, printing it).
+/// its name), or why there is none (for [`missing`]).
 pub async fn fresh_postgres(tag: &str) -> Result<(String, String, String), String> {
     use sqlx::Connection;
     let admin = test_postgres();

@@ -36,3 +36,13 @@ export async function api(method, path, body) {
 }
 
 export const get = (path) => api("GET", path).then((r) => r.body);
+
+let served = null;
+/** The service's limits and certification threshold (`GET /api/limits`), fetched once. */
+export function limits() {
+  served ??= get("/api/limits").catch((e) => {
+    served = null;
+    throw e;
+  });
+  return served;
+}

@@ -1,12 +1,14 @@
 // The front page: the sweeps (a page at a time, with controls) and the
 // submission form generated from the API's CaseParams schema.
-import { api, get, ApiError } from "./api.js";
+import { api, get, limits, ApiError } from "./api.js";
 import { esc, fmt, duration, when, notice, $ } from "./util.js";
 
 const PAGE = 20;
 const FINISHED = new Set(["done", "cancelled"]);
 let offset = 0;
 let timer = null;
+/** The service's limits (`GET /api/limits`), once read. */
+let served = null;
 
 export async function home(main) {
   main.innerHTML = `
@@ -44,6 +46,7 @@ export async function home(main) {
     presetCounts();
     $("#custom").dispatchEvent(new Event("input"));
   };
+  served = await limits().catch(() => null);
   await Promise.all([presets(), form(), refresh()]);
   clearInterval(timer);
   timer = setInterval(() => { if (location.hash === "" || location.hash === "#/") refresh(); else clearInterval(timer); }, 3000);
@@ -106,10 +109,12 @@ async function control(id, action) {
 /** The "certify" checkbox is ticked: every case gets its refined twin. */
 const certify = () => $("#certify")?.checked === true;
 
-/** "N cases", or with certify "2N cases: N points and their refined twins". */
+/** "N cases", or with certify "2N cases: N points and their refined twins"; beyond the service's limit, says so. */
 function cases(n) {
   const plural = (k, word) => `${k} ${word}${k === 1 ? "" : "s"}`;
-  return certify() ? `${plural(2 * n, "case")}: ${plural(n, "point")} and ${n === 1 ? "its" : "their"} refined twin${n === 1 ? "" : "s"}` : plural(n, "case");
+  const total = certify() ? 2 * n : n;
+  const text = certify() ? `${plural(total, "case")}: ${plural(n, "point")} and ${n === 1 ? "its" : "their"} refined twin${n === 1 ? "" : "s"}` : plural(n, "case");
+  return served && total > served.max_cases ? `${text}, over the limit of ${served.max_cases} cases per sweep` : text;
 }
 
 function presetCounts() {

@@ -41,7 +41,7 @@ export class KnotView {
   /**
    * Shows the centreline `points` ([[x, y, z]...], m) and the loaded contacts
    * ([{a, b, force}]) as beads between the touching surfaces, coloured from
-   * blue (weakest) to red (strongest force of the frame).
+   * blue (weakest) to red (strongest force of the snapshot).
    */
   show(points, contacts = []) {
     if (this.mesh) {

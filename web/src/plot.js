@@ -10,7 +10,7 @@ const axisColours = () => (dark() ? { stroke: "#ddd", grid: "#444" } : { stroke:
 
 /**
  * Overlaid curves. `curves`: [{label, colour, points: [[x, y]...], mark: x|null}].
- * Returns {plot, setMarker(x)}: a dashed vertical line at x (the case page's frame).
+ * Returns {plot, setMarker(x)}: a dashed vertical line at x (the case page's snapshot).
  */
 export function overlay(el, { title, x, y, curves, width }) {
   const xs = [...new Set(curves.flatMap((c) => c.points.map((p) => p[0])))].sort((a, b) => a - b);

@@ -2,7 +2,7 @@
 // finished case overlaid (paper Figs 6/8/10 a, b), the phase diagram
 // (Figs 7/9/11; a certified sweep's with error bars from the refined twins),
 // the cases, and downloads.
-import { api, get } from "./api.js";
+import { api, get, limits } from "./api.js";
 import { esc, fmt, duration, when, notice, colour, download, $ } from "./util.js";
 import { overlay, scatter } from "./plot.js";
 
@@ -27,8 +27,8 @@ export async function sweepPage(main, id) {
     <section aria-labelledby="dl-h"><h2 id="dl-h">Downloads</h2>
       <p><a href="/api/sweeps/${esc(id)}/phase-diagram" download="sweep-${esc(id)}-phase-diagram.json">phase diagram (JSON)</a> ·
       <button type="button" id="all-csv">all series (CSV)</button> ·
-      <a href="/api/sweeps/${esc(id)}/figures/f_bar.svg" download="sweep-${esc(id)}-F_bar.svg">F bar figure (SVG)</a> ·
-      <a href="/api/sweeps/${esc(id)}/figures/h_bar.svg" download="sweep-${esc(id)}-H_bar.svg">H bar figure (SVG)</a> ·
+      <a href="/api/sweeps/${esc(id)}/figures/F_bar.svg" download="sweep-${esc(id)}-F_bar.svg">F bar figure (SVG)</a> ·
+      <a href="/api/sweeps/${esc(id)}/figures/H_bar.svg" download="sweep-${esc(id)}-H_bar.svg">H bar figure (SVG)</a> ·
       <a href="/api/sweeps/${esc(id)}/figures/phase.svg" download="sweep-${esc(id)}-phase.svg">phase diagram (SVG)</a> ·
       <a href="/api/sweeps/${esc(id)}">sweep (JSON)</a></p></section>`;
   const state = { id, seriesOf: new Map(), drawn: "" };
@@ -48,10 +48,11 @@ export async function sweepPage(main, id) {
 
 async function refresh(state) {
   const { id } = state;
-  let sweep, all, pd;
+  let sweep, all, pd, served;
   try {
+    served = await limits();
     [sweep, all, pd] = await Promise.all([
-      get(`/api/sweeps/${id}`), get(`/api/sweeps/${id}/cases?limit=1000`), get(`/api/sweeps/${id}/phase-diagram`),
+      get(`/api/sweeps/${id}`), get(`/api/sweeps/${id}/cases?limit=${served.max_page}`), get(`/api/sweeps/${id}/phase-diagram`),
     ]);
   } catch (e) {
     notice(e.message);
@@ -115,8 +116,8 @@ async function refresh(state) {
       mark: c.inversion ? c.inversion.l_k_bar : null,
     }));
     if (finished.length) {
-      overlay($("#plot-f"), { title: "F bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "F bar", curves: curves((s) => s.f_bar) });
-      overlay($("#plot-h"), { title: "H bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "H bar", curves: curves((s) => s.h_bar) });
+      overlay($("#plot-f"), { title: "F bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "F bar", curves: curves((s) => s.F_bar) });
+      overlay($("#plot-h"), { title: "H bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "H bar", curves: curves((s) => s.H_bar) });
     } else {
       $("#plot-f").textContent = "Curves appear as cases finish.";
     }
@@ -136,7 +137,7 @@ async function refresh(state) {
       ? pd.points.filter((p) => p.simplified_l_k_bar !== null).map((p) => [Number(p.params[axisName]) * scale, p.simplified_l_k_bar])
       : [];
     // Certified: l_k bar +- |refined twin - point|, and a red ring where they
-    // differ by more than 2 % (or only one of the two inverts).
+    // differ by more than the service's threshold (or only one of the two inverts).
     const errors = inverted.filter((p) => settled(p) && p.uncertainty.absolute !== null)
       .map((p) => [...at(p), p.uncertainty.absolute]);
     const unconverged = inverted.filter((p) => settled(p) && p.uncertainty.converged === false).map(at);
@@ -158,7 +159,7 @@ async function refresh(state) {
       : "";
     $("#phase-note").textContent = [
       friction,
-      certification(pd, (p) => `${axisName} = ${p.params[axisName]}`),
+      certification(pd, served, (p) => `${axisName} = ${p.params[axisName]}`),
       none.length ? "Without an inversion: " + none.join("; ") + "." : "",
       held.length ? "F bar does not fall through the event at " + held.join("; ") +
         ". A kinetic energy tens of times its median marks a snap; 5-10 times marks a loop lying down while the pull keeps loading it (docs/FIDELITY.md)." : "",
@@ -166,7 +167,7 @@ async function refresh(state) {
   } else {
     const p = pd.points[0];
     $("#phase").textContent = p && p.inversion ? `Inversion at l_k bar ${fmt(p.inversion.l_k_bar)}${plusMinus(p)}` : "A single case: no axis to plot.";
-    $("#phase-note").textContent = certification(pd, () => "the case");
+    $("#phase-note").textContent = certification(pd, served, () => "the case");
   }
 }
 
@@ -177,8 +178,9 @@ function settled(p) {
 }
 
 /** The note on a certified sweep's uncertainties: the unconverged points, and the twins still running. */
-function certification(pd, name) {
+function certification(pd, served, name) {
   if (!pd.certified) return "";
+  const threshold = `${fmt(100 * served.converged_within, 1)} %`;
   const pending = pd.points.filter((p) => !settled(p)).length;
   const why = (u) => u.relative !== null ? `the refined twin differs by ${fmt(100 * u.relative, 1)} %`
     : u.refined_l_k_bar !== null ? "only the refined twin inverts" : "the refined twin does not invert";
@@ -186,15 +188,15 @@ function certification(pd, name) {
     .map((p) => `${name(p)} (${why(p.uncertainty)})`);
   return [
     "Certified: error bars are ± the change of the inversion's l_k bar when the time step is halved (each point's refined twin).",
-    flagged.length ? `Unconverged (ringed red: more than 2 % apart, or only one of the two inverts): ${flagged.join("; ")}.` : "",
+    flagged.length ? `Unconverged (ringed red: more than ${threshold} apart, or only one of the two inverts): ${flagged.join("; ")}.` : "",
     !pending ? "" : pd.complete ? `Without an uncertainty: ${pending} of ${pd.points.length} points (they or their refined twins have no result).`
       : `Still running: ${pending} of ${pd.points.length} points or their refined twins; the error bars appear as both finish.`,
-    pending || flagged.length ? "" : "Every point converged within 2 %.",
+    pending || flagged.length ? "" : `Every point converged within ${threshold}.`,
   ].filter(Boolean).join(" ");
 }
 
 async function allSeries(state) {
-  const cases = await get(`/api/sweeps/${state.id}/cases?limit=1000`);
+  const cases = await get(`/api/sweeps/${state.id}/cases?limit=${(await limits()).max_page}`);
   let out = "";
   for (const c of cases) {
     const r = await fetch(`/api/cases/${c.case_id}/series.csv`);

@@ -60,9 +60,15 @@ fn write_canonical(value: &serde_json::Value, out: &mut String) {
 /// The case key: hex blake3 of the solver version, the physics revision
 /// (`solver::case::PHYSICS_REVISION`) and the canonical parameters.
 pub fn case_key(params: &CaseParams) -> String {
+    case_key_under(params, solver::case::PHYSICS_REVISION)
+}
+
+/// The key `params` has under physics revision `revision` ([`case_key`] is
+/// the current revision's).
+pub fn case_key_under(params: &CaseParams, revision: u32) -> String {
     let mut hasher = blake3::Hasher::new();
     hasher.update(SOLVER_VERSION.as_bytes());
-    hasher.update(format!("\nphysics {}\n", solver::case::PHYSICS_REVISION).as_bytes());
+    hasher.update(format!("\nphysics {revision}\n").as_bytes());
     hasher.update(canonical_json(params).as_bytes());
     hasher.finalize().to_hex().to_string()
 }

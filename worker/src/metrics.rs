@@ -97,7 +97,8 @@ impl WorkerMetrics {
         ]
     }
 
-    /// Prometheus text exposition of these counters.
+    /// Prometheus text exposition of these counters (`let _ =`: writing to a
+    /// `String` cannot fail).
     pub fn render(&self, out: &mut String) {
         for (name, help, value) in self.counters() {
             let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} counter\n{name} {value}");

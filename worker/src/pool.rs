@@ -24,6 +24,14 @@ use tokio::sync::{oneshot, watch};
 use tokio::task::JoinHandle;
 use tracing::Instrument;
 
+/// The default lease length ([`PoolConfig::lease`]).
+pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
+/// The default idle poll interval ([`PoolConfig::poll`]).
+pub const DEFAULT_POLL: Duration = Duration::from_millis(250);
+/// Heartbeats per lease ([`PoolConfig::heartbeat`]): a lease survives two
+/// missed heartbeats.
+pub const HEARTBEATS_PER_LEASE: u32 = 3;
+
 /// Settings of a pool.
 #[derive(Clone, Debug)]
 pub struct PoolConfig {
@@ -32,8 +40,6 @@ pub struct PoolConfig {
     /// Lease length; a case whose holder stops heartbeating returns to the
     /// queue this long after its last heartbeat.
     pub lease: Duration,
-    /// Heartbeat interval: a fraction of the lease (default a third).
-    pub heartbeat: Duration,
     /// Idle poll interval (with jitter) when the queue is empty.
     pub poll: Duration,
     /// Prefix of the lease owner names (`<name>-<slot>`).
@@ -45,25 +51,28 @@ pub struct PoolConfig {
 }
 
 impl PoolConfig {
-    /// `workers` slots (0: one per core), 30 s leases, heartbeats every 10 s.
+    /// `workers` slots (0: one per core), [`DEFAULT_LEASE`], [`DEFAULT_POLL`].
     pub fn new(workers: usize) -> Self {
         let workers = if workers == 0 { default_workers() } else { workers };
         Self {
             workers,
-            lease: Duration::from_secs(30),
-            heartbeat: Duration::from_secs(10),
-            poll: Duration::from_millis(250),
+            lease: DEFAULT_LEASE,
+            poll: DEFAULT_POLL,
             name: default_owner_name(),
             shutdown_grace: Duration::from_secs(5),
             max_cases: None,
         }
     }
 
-    /// Sets the lease and a heartbeat at a third of it.
+    /// Sets the lease.
     pub fn with_lease(mut self, lease: Duration) -> Self {
         self.lease = lease;
-        self.heartbeat = lease / 3;
         self
+    }
+
+    /// The heartbeat interval: the lease over [`HEARTBEATS_PER_LEASE`].
+    pub fn heartbeat(&self) -> Duration {
+        self.lease / HEARTBEATS_PER_LEASE
     }
 }
 
@@ -74,6 +83,8 @@ pub fn default_workers() -> usize {
 
 /// `<hostname>-<pid>-<random>`: unique per pool.
 pub fn default_owner_name() -> String {
+    // The host only makes the lease owners' names readable: without one the
+    // pid and the random suffix still make them unique.
     let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
         .ok()
         .or_else(|| std::env::var("HOSTNAME").ok())
@@ -99,7 +110,7 @@ impl PoolHandle {
     /// Slots that have neither polled the queue nor heartbeated for longer
     /// than `max(4 * heartbeat, 4 * poll, 10 s)`: a pool that silently stopped.
     pub fn stalled_slots(&self) -> Vec<usize> {
-        let limit = (4 * self.config.heartbeat)
+        let limit = (4 * self.config.heartbeat())
             .max(4 * self.config.poll)
             .max(Duration::from_secs(10));
         let now = now_ms();
@@ -177,9 +188,12 @@ impl WorkerPool {
 
     /// Stops claiming, releases the held leases and waits for the slots.
     pub async fn shutdown(self) {
+        // Fails only when every slot has already ended (no receiver left).
         let _ = self.shutdown.send(true);
         for task in self.tasks {
-            let _ = task.await;
+            if let Err(e) = task.await {
+                tracing::error!(error = %e, "a worker slot's supervisor ended abnormally");
+            }
         }
         tracing::info!(name = %self.handle.config.name, "worker pool stopped");
     }
@@ -299,6 +313,8 @@ impl SolverRun {
                     !stopped.load(Ordering::Relaxed)
                 })
             }));
+            // The receiver is gone only when the slot stopped waiting for this
+            // run (shutdown after its grace period): nobody is left to tell.
             let _ = tx.send(run.map_err(|payload| panic_message(payload.as_ref())));
         });
         Self { stop, latest, report }
@@ -308,6 +324,8 @@ impl SolverRun {
         self.stop.store(true, Ordering::Relaxed);
     }
 
+    /// The latest progress; none yet, or none after the solver panicked while
+    /// holding the lock (the panic itself is reported as the run's outcome).
     fn progress(&self) -> Option<Progress> {
         self.latest.lock().ok().and_then(|l| *l)
     }
@@ -351,7 +369,7 @@ async fn supervise(
     run: &mut SolverRun,
     shutdown: &mut watch::Receiver<bool>,
 ) -> Outcome {
-    let period = ctx.config.heartbeat.max(Duration::from_millis(10));
+    let period = ctx.config.heartbeat().max(Duration::from_millis(10));
     let mut ticker = tokio::time::interval_at(tokio::time::Instant::now() + period, period);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut state = LeaseState::Held;
@@ -417,7 +435,15 @@ async fn shut_down(ctx: &Ctx, lease: &Lease, run: &mut SolverRun) -> Outcome {
         Ok(false) => tracing::info!("shutting down: the lease was no longer ours"),
         Err(e) => tracing::warn!(error = %e, "shutting down: releasing the lease failed; it will expire"),
     }
-    let _ = tokio::time::timeout(ctx.config.shutdown_grace, run.finished()).await;
+    if tokio::time::timeout(ctx.config.shutdown_grace, run.finished())
+        .await
+        .is_err()
+    {
+        tracing::warn!(
+            grace_s = ctx.config.shutdown_grace.as_secs_f64(),
+            "shutting down: the solver did not stop within the grace period; left to end on its own"
+        );
+    }
     Outcome::ShutDown
 }
 
@@ -428,7 +454,9 @@ async fn record(ctx: &Ctx, lease: &Lease, outcome: Outcome, claimed_at: Instant)
         Outcome::LeaseLost => {
             WorkerMetrics::inc(&ctx.metrics.lost_leases);
             let message = format!("{} lost its lease; its run was discarded", lease.owner);
-            let _ = ctx.store.append_log(lease.case_id, "warn", &message).await;
+            if let Err(e) = ctx.store.append_log(lease.case_id, "warn", &message).await {
+                tracing::warn!(error = %e, "{message}; the log line could not be stored");
+            }
         }
         Outcome::Crashed(panic) => record_crash(ctx, lease, &panic).await,
         Outcome::Report(report) if report.status == Status::Cancelled => {
@@ -466,8 +494,8 @@ async fn record_crash(ctx: &Ctx, lease: &Lease, panic: &str) {
 async fn record_result(ctx: &Ctx, lease: &Lease, report: &CaseReport, claimed_at: Instant) {
     match with_retries(|| ctx.store.complete(lease, report)).await {
         Ok(true) => {
-            let outcome = serde_json::to_value(report.status).ok();
-            let outcome = outcome.as_ref().and_then(|v| v.as_str()).unwrap_or("unknown");
+            let outcome = report.status.to_string();
+            let outcome = outcome.as_str();
             let total = claimed_at.elapsed().as_secs_f64();
             ctx.metrics
                 .record_completion(outcome, report.stats.wall_time, total);

@@ -1,6 +1,6 @@
-//! A case's frames for ParaView: per frame two VTK XML PolyData files, the
-//! centre line and its loaded contacts, and a `.pvd` collection that orders
-//! them in time, each frame's two files its parts 0 and 1 (ParaView opens
+//! A case's snapshots for ParaView: per snapshot two VTK XML PolyData files,
+//! the centre line and its loaded contacts, and a `.pvd` collection that
+//! orders them in time, each snapshot's two files its parts 0 and 1 (ParaView opens
 //! the `.pvd` as one multiblock data set per time).
 //!
 //! Centre line (`centreline_NNN.vtp`): the nodes (m) joined by one polyline,
@@ -12,7 +12,7 @@
 //! and `l_k_bar`.
 mod xml;
 
-use solver::protocol::Frame;
+use solver::protocol::Snapshot;
 use xml::{Array, Cells, DataSet, Values};
 
 /// A file to write: its path relative to the output directory (`/`
@@ -22,11 +22,11 @@ pub struct VtkFile {
     pub text: String,
 }
 
-/// The files of `frames` of a case of rod radius `radius` (m), named after
+/// The files of `snapshots` of a case of rod radius `radius` (m), named after
 /// `name`: `{name}.pvd` and, in time order, `{name}/centreline_NNN.vtp` and
 /// `{name}/contacts_NNN.vtp`.
-pub fn case_files(name: &str, radius: f64, frames: &[Frame]) -> Vec<VtkFile> {
-    let ordered = in_time(frames);
+pub fn case_files(name: &str, radius: f64, snapshots: &[Snapshot]) -> Vec<VtkFile> {
+    let ordered = in_time(snapshots);
     let mut files = Vec::with_capacity(1 + 2 * ordered.len());
     for (k, (time, f)) in ordered.iter().enumerate() {
         for (part, text) in [centreline(f, radius, *time), contacts(f, *time)]
@@ -59,15 +59,15 @@ pub fn case_files(name: &str, radius: f64, frames: &[Frame]) -> Vec<VtkFile> {
     std::iter::once(pvd).chain(files).collect()
 }
 
-/// The names of a frame's two files, parts 0 and 1 of the collection.
+/// The names of a snapshot's two files, parts 0 and 1 of the collection.
 const PARTS: [&str; 2] = ["centreline", "contacts"];
 
-/// The frames in time order with their times (s), a frame stored twice (one
-/// sample under two labels) once. Frames stored before their time was
+/// The snapshots in time order with their times (s), a snapshot stored twice
+/// (one sample under two labels) once. Snapshots stored before their time was
 /// recorded go by falling l_k bar, numbered 0, 1, 2, ... for time.
-fn in_time(frames: &[Frame]) -> Vec<(f64, &Frame)> {
-    let timed = frames.iter().any(|f| f.time > 0.0);
-    let mut list: Vec<&Frame> = frames.iter().collect();
+fn in_time(snapshots: &[Snapshot]) -> Vec<(f64, &Snapshot)> {
+    let timed = snapshots.iter().any(|f| f.time > 0.0);
+    let mut list: Vec<&Snapshot> = snapshots.iter().collect();
     if timed {
         list.sort_by(|a, b| a.time.total_cmp(&b.time));
     } else {
@@ -80,7 +80,7 @@ fn in_time(frames: &[Frame]) -> Vec<(f64, &Frame)> {
         .collect()
 }
 
-/// Whole-file values of a frame at `time`.
+/// Whole-file values of a snapshot at `time`.
 fn field_data<'a>(time: &'a [f64; 1], l_k_bar: &'a [f64; 1]) -> [Array<'a>; 2] {
     [
         Array::scalars("TimeValue", Values::F64(time)),
@@ -88,9 +88,9 @@ fn field_data<'a>(time: &'a [f64; 1], l_k_bar: &'a [f64; 1]) -> [Array<'a>; 2] {
     ]
 }
 
-/// The centre line of `f`; per-node fields it lacks (a frame stored before
+/// The centre line of `f`; per-node fields it lacks (a snapshot stored before
 /// they were recorded) are left out.
-fn centreline(f: &Frame, radius: f64, time: f64) -> String {
+fn centreline(f: &Snapshot, radius: f64, time: f64) -> String {
     let n = f.points.len();
     let radii = vec![radius; n];
     let velocity: Vec<f32> = f.velocity.iter().flatten().copied().collect();
@@ -110,7 +110,7 @@ fn centreline(f: &Frame, radius: f64, time: f64) -> String {
 }
 
 /// The loaded contacts of `f`.
-fn contacts(f: &Frame, time: f64) -> String {
+fn contacts(f: &Snapshot, time: f64) -> String {
     let points: Vec<[f64; 3]> = f
         .contacts
         .iter()
@@ -132,11 +132,11 @@ fn contacts(f: &Frame, time: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::case_files;
-    use solver::protocol::{Frame, FrameContact};
+    use solver::protocol::{Snapshot, SnapshotContact};
 
-    /// A frame of `n` nodes along x at `time`, with one sticking contact.
-    fn frame(label: &str, time: f64, l_k_bar: f64, n: usize) -> Frame {
-        Frame {
+    /// A snapshot of `n` nodes along x at `time`, with one sticking contact.
+    fn snapshot(label: &str, time: f64, l_k_bar: f64, n: usize) -> Snapshot {
+        Snapshot {
             label: label.to_string(),
             l_k_bar,
             time,
@@ -144,7 +144,7 @@ mod tests {
             twist_rate: vec![1.5; n],
             curvature: vec![0.25; n],
             velocity: vec![[0.0, 1e-3, 0.0]; n],
-            contacts: vec![FrameContact {
+            contacts: vec![SnapshotContact {
                 a: [0.0, 0.0, 1e-3],
                 b: [0.0, 0.0, -1e-3],
                 force: 1.0,
@@ -175,13 +175,13 @@ mod tests {
     }
 
     #[test]
-    fn one_polyline_and_the_contacts_per_frame_in_time_order() {
-        let frames = [
-            frame("pull", 2.0, 140.0, 5),
-            frame("relaxed", 1.0, 160.0, 5),
-            frame("at_inversion", 2.0, 140.0, 5),
+    fn one_polyline_and_the_contacts_per_snapshot_in_time_order() {
+        let snapshots = [
+            snapshot("pull", 2.0, 140.0, 5),
+            snapshot("relaxed", 1.0, 160.0, 5),
+            snapshot("at_inversion", 2.0, 140.0, 5),
         ];
-        let files = case_files("case", 1.6e-3, &frames);
+        let files = case_files("case", 1.6e-3, &snapshots);
         let paths: Vec<&str> = files.iter().map(|f| f.path.as_str()).collect();
         assert_eq!(
             paths,
@@ -233,8 +233,11 @@ mod tests {
     }
 
     #[test]
-    fn frames_stored_before_times_and_fields_go_by_l_k_bar() {
-        let mut old = [frame("pull", 0.0, 120.0, 4), frame("relaxed", 0.0, 160.0, 4)];
+    fn snapshots_stored_before_times_and_fields_go_by_l_k_bar() {
+        let mut old = [
+            snapshot("pull", 0.0, 120.0, 4),
+            snapshot("relaxed", 0.0, 160.0, 4),
+        ];
         for f in &mut old {
             (f.twist_rate, f.curvature, f.velocity) = (Vec::new(), Vec::new(), Vec::new());
         }

@@ -25,29 +25,8 @@ pub use table::{Bound, Group, Parameter, Range};
 
 /// Revision of the physics: raised whenever a change to the model or its
 /// defaults changes results, and part of every case's cache key, so that
-/// results computed under older physics are never served as current.
-/// Revision 1: the model of session 3 (friction at the centre lines).
-/// Revision 2: friction at the surfaces, so rods roll on each other
-/// (`rolling`, docs/FIDELITY.md).
-/// Revision 3: the adaptive pull is the default protocol (`protocol`).
-/// Revision 4: the contact solve steps each contact's normal force by the
-/// exact normal entry of its Delassus block instead of the rolling block's
-/// largest eigenvalue, and starts from the forces extrapolated from the last
-/// two steps: the same solutions, reached in about a sixth of the sweeps, so
-/// each step's forces are closer to them at the same tolerance.
-/// Revision 5: the paper's model and start: friction at the centre lines
-/// (`rolling` false), the knot starts with the paper's code's twist
-/// (`start_twist`, linking number 2n), the reference pull is the default
-/// protocol, and F bar is the clamp force averaged over each sample's
-/// interval (docs/FIDELITY.md).
-/// Revision 6: the adaptive pull runs fast up to mu = 0.7 (was 0.2) and
-/// goes back to pull slowly through a snap its damped approach smeared out
-/// (`protocol::smeared_snap`); the presets pull adaptively; the reference
-/// pull is unchanged.
-/// Revision 7: the adaptive pull's fast stages spare sliding along the centre
-/// line from their damping (`external::sliding`), it restarts 8 (was 10)
-/// before the fast pull's snap, and it is the default protocol; the reference
-/// pull is unchanged.
+/// results computed under older physics are never served as current. What
+/// each revision changed, and why, is in CHANGELOG.md.
 pub const PHYSICS_REVISION: u32 = 7;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).
@@ -56,23 +35,14 @@ pub const PHYSICS_REVISION: u32 = 7;
 pub enum Protocol {
     /// The whole pull at `pull_speed` (the paper's protocol).
     Reference,
-    /// Fast far from the snap: the clamps ramp up to `FAST_FACTOR` times
-    /// `pull_speed`, damped as in the relaxation but sparing the sliding
-    /// along the rod (`external::sliding`), and (with `adaptive_dt`)
-    /// with steps up to `FAST_DT_FACTOR` times the case's, with a checkpoint every
-    /// `CHECKPOINT_SPACING` in l_k bar. When a snap is detected, the pull
-    /// goes back to the checkpoint `RESTART_BEFORE` before it, lets the knot
-    /// settle with the clamps held (damped, steps up to `FAST_DT_FACTOR`
-    /// times the case's), and pulls through the snap at `pull_speed`
-    /// (`SNAP_FACTOR`) with the case's damping and step, fast again from
-    /// `SLOW_AFTER` past it. A snap within `MIN_LEAD` of the restart means
-    /// the restart was past the fold: it is redone from `RESTART_BEFORE`
-    /// further back. A snap stage that finds no snap within `FALSE_ALARM`
-    /// approaches fast again; a fast approach that reaches the end of the
-    /// pull redoes its last `END_REVIEW` slowly. Above `ADAPTIVE_MAX_MU` the
-    /// whole pull is the reference's. The report's `stages` list what ran.
-    /// Its inversion lies within 1 % of the reference's; its fast approach
-    /// reads F bar about 5 % high (BENCHMARKS.md, "Physics revision 7").
+    /// Fast far from the snap, slow through it: the clamps speed up while the
+    /// knot is far from its snap (damped, sparing the sliding along the rod,
+    /// with checkpoints); once a snap is seen the pull goes back to a
+    /// checkpoint before it, lets the knot settle and pulls through the snap
+    /// at `pull_speed`. Its constants and what they were chosen on are in
+    /// `solver::protocol`; the report's `stages` list what ran. Its
+    /// inversions match the reference pull's (BENCHMARKS.md); its fast
+    /// approach reads F bar high, so force curves are the reference's.
     #[default]
     Adaptive,
 }

@@ -180,12 +180,9 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "false",
         doc: "Friction acts at the rods' surfaces: a contact's slip includes each rod's spin about its axis and \
               friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g \
-              sin alpha). false: friction at the centre lines, as in the paper's method and code; with the paper's \
-              start twist it reproduces Fig. 1 (n = 3 inverts at l_k bar 136.4, n = 4 at 213.5; the paper's code \
-              148 +- 2 and 215 +- 2; the experiments' brackets hold both), Fig. 7 (h invariance), Fig. 9 (growth \
-              with n) and Fig. 11 (l_k bar grows with mu at h = 3.4 mm, with a clean snap at every mu 0.1-0.7). \
-              true: n = 3 inverts at 124.9, n = 4 at 193.0 with the start twist, and at h = 3.4 mm F bar no \
-              longer falls through the events at mu = 0.4 and 0.7 (docs/FIDELITY.md).",
+              sin alpha). false: friction at the centre lines, as in the paper's method and code, the model that \
+              reproduces the paper's Figs 1, 7, 9 and 11 together with its start twist. The inversions of both \
+              are in docs/VALIDATION.md (\"Sensitivity\"), set beside the paper's in docs/FIDELITY.md.",
         value: UNCHECKED,
     },
     Parameter {
@@ -200,8 +197,8 @@ pub const PARAMETERS: &[Parameter] = &[
               velocities v + dt M^-1 F and the mass-only Delassus operator, the forces then held fixed in the \
               implicit step) or \"implicit\" (the free velocities of a contact-free implicit step and the Delassus \
               operator of its Newton matrix, so a sticking contact holds for the motion the step takes, without \
-              creep; a banded solve per contact axis each step: about 45 times the cost per step, 5.9 ms against \
-              0.13 ms at n = 3, K = 301, BENCHMARKS.md).",
+              creep; a banded solve per contact axis and a dense contact solve each step, many times the explicit \
+              solve's cost: BENCHMARKS.md).",
         value: UNCHECKED,
     },
     Parameter {
@@ -215,10 +212,10 @@ pub const PARAMETERS: &[Parameter] = &[
         doc: "Which segment pairs get a contact force each step: \"detected\" (every pair within reach at the start \
               of the step, one of two pairs meeting at a shared node) or \"predicted\" (as the paper's code: only \
               the pairs that a contact-free implicit predictor step brings closer than 2h, so a touching pair that \
-              the predictor pulls apart gets no force in that step; a second Newton solve per step). \"predicted\" \
-              with dt 1 ms fixed (adaptive_dt false) and the reference protocol tracks the paper's code's n = 4 \
-              curve (inversion at l_k bar 213.7 against 215 +- 2, F bar within 4 %); n = 3 inverts at 131.8 \
-              against 148.",
+              the predictor pulls apart gets no force in that step; a second Newton solve per step). With dt 1 ms \
+              fixed (adaptive_dt false) and the reference protocol, \"predicted\" is the paper's code's scheme: \
+              its inversions are in docs/VALIDATION.md (\"Sensitivity\"), beside the paper's code's in \
+              docs/FIDELITY.md.",
         value: UNCHECKED,
     },
     Parameter {
@@ -232,10 +229,9 @@ pub const PARAMETERS: &[Parameter] = &[
              knot's writhe)",
         ),
         paper: "null (the code)",
-        doc: "Twist the knot starts with between its clamps, spread evenly along the rod. The paper's code's is \
-              about +1.0 to +1.3 turns for the builder's knots n = 1..5 (writhe -3.0 to -11.3); 0: none, as if the \
-              knot's ends had turned freely while it was tied (n = 3 then inverts at l_k bar 150.4, n = 4 at \
-              245.5). The report gives the twist used and the knot's writhe.",
+        doc: "Twist the knot starts with between its clamps, spread evenly along the rod; 0: none, as if the \
+              knot's ends had turned freely while it was tied. The report gives the twist used and the knot's \
+              writhe; docs/VALIDATION.md (\"Sensitivity\") the inversions with and without it.",
         value: |p| p.start_twist.map(Value::Number),
     },
     Parameter {
@@ -348,15 +344,13 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::Words(&["reference", "adaptive"]),
         null: None,
         paper: "\"reference\"",
-        doc: "How the clamps move: \"reference\" pulls at pull_speed throughout, as in the paper. \"adaptive\" ramps \
-              up to 16 times pull_speed while the knot is far from its snap (damped, sparing the sliding along the \
-              rod; with adaptive_dt, steps up to 4 times dt), keeping a checkpoint every 2 in l_k bar; once a snap is \
-              detected it goes back to the checkpoint 8 before it (further if the knot then snaps within 2; also when \
-              H bar falls to 0.4 within 20, a snap the approach smeared out), lets the knot settle and pulls through \
-              the snap at pull_speed; above mu = 0.7 (not measured) it pulls as \"reference\" does. Its inversion \
-              lies within 0.6 % of the reference's at every preset case at about a tenth of the cost; its fast \
-              approach reads F bar about 5 % above the reference's (BENCHMARKS.md, \"Physics revision 7\"): \
-              choose \"reference\" for force curves.",
+        doc: "How the clamps move: \"reference\" pulls at pull_speed throughout, as in the paper. \"adaptive\" pulls \
+              fast while the knot is far from its snap (damped, sparing the sliding along the rod, keeping \
+              checkpoints); once it sees a snap it goes back to a checkpoint before it, lets the knot settle and \
+              pulls through the snap at pull_speed (solver::protocol holds its constants; at the largest frictions \
+              it pulls as \"reference\" does). Its inversions match the reference's at a fraction of the cost, \
+              but its fast approach reads F bar high (BENCHMARKS.md, \"Pull protocols\"): choose \"reference\" for \
+              force curves.",
         value: UNCHECKED,
     },
     Parameter {

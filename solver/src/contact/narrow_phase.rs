@@ -18,7 +18,7 @@ pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment])
         let key = if i < j { (i, j) } else { (j, i) };
         pairs
             .binary_search_by(|q| (q.i, q.j).cmp(&key))
-            .ok()
+            .ok() // Err: no such pair (not a failure)
             .map(|m| (m, key.0 == i))
     };
     // (this segment, partner, parameter on this segment)

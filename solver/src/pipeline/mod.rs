@@ -18,7 +18,7 @@
 //! and the Delassus operator from its Newton matrix.
 mod implicit;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
-use crate::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
+use crate::contact::gauss_seidel::{ContactError, ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
 use crate::contact::segment::closest_points;
 use crate::contact::{Candidates, ContactSolve, FrictionLaw, narrow_phase};
 use crate::counters::Counters;
@@ -99,6 +99,10 @@ pub enum WorldError {
     Step { rod: usize, source: StepError },
     #[error("contact detection: {0}")]
     Detection(String),
+    /// The frictional contact solve refused its problem (non-finite or
+    /// inconsistent data): the step is not taken without its contact forces.
+    #[error("contact solve failed: {0}")]
+    Contact(#[from] ContactError),
 }
 
 /// Several rods, their steppers and the contact machinery with reusable buffers.
@@ -356,14 +360,16 @@ impl World {
                 Counters::time(&mut solve, || self.predict(dt))?;
             }
             report.contacts = self.contacts.len();
-            if !self.contacts.is_empty() {
-                let implicit = self.contact.solve == ContactSolve::Implicit;
-                if !(implicit && Counters::time(&mut solve, || self.solve_contacts_implicit(dt, &mut report)))
-                {
-                    Counters::time(&mut solve, || self.solve_contacts(dt, &mut report));
-                }
-            }
+            let implicit = self.contact.solve == ContactSolve::Implicit;
+            let solved = if self.contacts.is_empty()
+                || implicit && Counters::time(&mut solve, || self.solve_contacts_implicit(dt, &mut report))
+            {
+                Ok(())
+            } else {
+                Counters::time(&mut solve, || self.solve_contacts(dt, &mut report))
+            };
             self.counters.contact_solve = solve;
+            solved?;
         }
         let mut dynamics = self.counters.dynamics;
         let result = Counters::time(&mut dynamics, || self.step_rods(dt, &mut report));
@@ -437,7 +443,9 @@ impl World {
         Ok(())
     }
 
-    fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) {
+    /// The explicit contact solve (steps 2-3): contact forces into each
+    /// rod's `force`; a [`ContactError`] ends the step before the rods move.
+    fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
         for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
             let grad: &[f64] = match body.stepper.elastic_gradient(rod) {
                 Some(g) => g,
@@ -488,7 +496,7 @@ impl World {
             inv_inertia: &self.spin_inv_inertia,
             free: &self.spin_free,
         });
-        let solved = self.gauss_seidel.solve_with_spin(
+        let sol = self.gauss_seidel.solve_with_spin(
             &self.contacts,
             &self.inv_mass,
             &self.v_free,
@@ -496,10 +504,7 @@ impl World {
             dt,
             &self.contact.solver,
             Some(&self.warm),
-        );
-        let Ok(sol) = solved else {
-            return;
-        };
+        )?;
         report.contact_sweeps = sol.sweeps;
         report.contact_residual = sol.residual;
         report.active_contacts = self
@@ -527,6 +532,7 @@ impl World {
         }
         self.forces.extend_from_slice(self.gauss_seidel.contact_forces());
         self.history.push(&self.pair_ids, &self.forces, dt);
+        Ok(())
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {

@@ -71,15 +71,18 @@ pub struct RetryPolicy {
 
 impl Default for RetryPolicy {
     fn default() -> Self {
-        Self {
-            max_attempts: 3,
-            base: Duration::from_secs(1),
-            cap: Duration::from_secs(60),
-        }
+        Self::DEFAULT
     }
 }
 
 impl RetryPolicy {
+    /// Three claims, backoff from 1 s up to 60 s.
+    pub const DEFAULT: Self = Self {
+        max_attempts: 3,
+        base: Duration::from_secs(1),
+        cap: Duration::from_secs(60),
+    };
+
     /// The delay before the next attempt after `attempts` failed ones.
     pub fn backoff(&self, attempts: u32) -> Duration {
         let exp = attempts.saturating_sub(1).min(30);
@@ -163,13 +166,19 @@ impl CaseState {
 pub struct NewCase {
     pub key: String,
     pub params: CaseParams,
+    /// In a certified sweep, a point's refined twin: the twin's position
+    /// among the sweep's cases (stored with the sweep, so that the twin is
+    /// found whatever its key becomes).
+    pub twin_position: Option<usize>,
 }
 
 impl NewCase {
+    /// The case of `params` under its current key, with no twin.
     pub fn new(params: CaseParams) -> Self {
         Self {
             key: crate::key::case_key(&params),
             params,
+            twin_position: None,
         }
     }
 }
@@ -233,7 +242,7 @@ pub enum CreateOutcome {
     Replayed { sweep: SweepRecord },
 }
 
-/// A case row with its result summary (no series or frames).
+/// A case row with its result summary (no series or snapshots).
 #[derive(Clone, Debug)]
 pub struct CaseRecord {
     pub id: i64,
@@ -288,6 +297,9 @@ pub struct SweepCase {
     pub position: i64,
     /// The result existed when the sweep was submitted.
     pub cached: bool,
+    /// A certified point's refined twin: its position in the sweep (none on
+    /// other cases and in sweeps stored before the relation was).
+    pub twin_position: Option<i64>,
     pub case: CaseRecord,
 }
 
@@ -382,8 +394,8 @@ pub trait Store: Send + Sync + 'static {
     async fn case_sweeps(&self, id: i64) -> StoreResult<Vec<i64>>;
     /// The series of a case's result as stored (JSON array of samples).
     async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>>;
-    /// The frames of a case's result as stored (JSON array of frames).
-    async fn case_frames_json(&self, id: i64) -> StoreResult<Option<String>>;
+    /// The snapshots of a case's result as stored (JSON array).
+    async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>>;
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>>;
     async fn append_log(&self, case_id: i64, level: &str, message: &str) -> StoreResult<()>;
 

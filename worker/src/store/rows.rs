@@ -97,12 +97,10 @@ pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     Ok(CaseRecord {
         id: r.int("id")?,
         // A retired attempt's row stores `key#id` (`Store::create_sweep`).
-        key: r
-            .text("case_key")?
-            .split('#')
-            .next()
-            .unwrap_or_default()
-            .to_string(),
+        key: {
+            let key = r.text("case_key")?;
+            key.split_once('#').map_or(key.as_str(), |(k, _)| k).to_string()
+        },
         solver_version: r.text("solver_version")?,
         params: json(&r.text("params")?, "case params")?,
         state: CaseState::parse(&r.text("status")?)?,
@@ -126,13 +124,13 @@ pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     })
 }
 
-/// What a completed report stores: outcome word, summary, series, frames and
+/// What a completed report stores: outcome word, summary, series, snapshots and
 /// inversion (JSON text), and the log line.
 pub(crate) struct StoredResult {
     pub outcome: String,
     pub summary: String,
     pub series: String,
-    pub frames: String,
+    pub snapshots: String,
     pub inversion: Option<String>,
     pub message: String,
 }
@@ -146,8 +144,7 @@ impl StoredResult {
                 "a cancelled run is not a result".to_string(),
             ));
         }
-        let outcome = serde_json::to_value(report.status).expect("status serialises");
-        let outcome = outcome.as_str().unwrap_or("unknown").to_string();
+        let outcome = report.status.to_string();
         let summary = serde_json::json!({
             "determinant_initial": report.determinant_initial,
             "determinant_final": report.determinant_final,
@@ -166,7 +163,7 @@ impl StoredResult {
             outcome,
             summary: summary.to_string(),
             series: serde_json::to_string(&report.series).expect("series serialises"),
-            frames: serde_json::to_string(&report.frames).expect("frames serialise"),
+            snapshots: serde_json::to_string(&report.snapshots).expect("snapshots serialise"),
             inversion: report
                 .inversion
                 .map(|i| serde_json::to_string(&i).expect("inversion serialises")),

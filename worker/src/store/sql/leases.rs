@@ -56,6 +56,7 @@ impl Expired {
             id: r.int("id")?,
             attempts: r.int("attempts")? as u32,
             max_attempts: r.int("max_attempts")? as u32,
+            // An expired lease always has an owner; an empty name only shortens the log line.
             owner: r.text_or_null("lease_owner")?.unwrap_or_default(),
             fence: r.int("fence")?,
             cancel_requested: r.int("cancel_requested")? != 0,
@@ -225,7 +226,7 @@ impl<B: Backend> SqlStore<B> {
             return Ok(false);
         }
         sqlx::query(
-            "INSERT INTO results (case_id, outcome, reason, inversion, summary, series, frames, wall_time, \
+            "INSERT INTO results (case_id, outcome, reason, inversion, summary, series, snapshots, wall_time, \
              worker, fence, created_at) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11)",
         )
         .bind(lease.case_id)
@@ -234,7 +235,7 @@ impl<B: Backend> SqlStore<B> {
         .bind(&stored.inversion)
         .bind(&stored.summary)
         .bind(&stored.series)
-        .bind(&stored.frames)
+        .bind(&stored.snapshots)
         .bind(report.stats.wall_time)
         .bind(&lease.owner)
         .bind(lease.fence)

@@ -128,7 +128,7 @@ impl<B: Backend> Store for SqlStore<B> {
 
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>> {
         let sql = format!(
-            "SELECT sc.position, sc.cached, {CASE_COLUMNS} FROM sweep_cases sc \
+            "SELECT sc.position, sc.cached, sc.twin_position, {CASE_COLUMNS} FROM sweep_cases sc \
              JOIN cases c ON c.id = sc.case_id LEFT JOIN results r ON r.case_id = c.id \
              WHERE sc.sweep_id = $1 ORDER BY sc.position"
         );
@@ -138,6 +138,7 @@ impl<B: Backend> Store for SqlStore<B> {
                 Ok(SweepCase {
                     position: r.int("position")?,
                     cached: r.int("cached")? != 0,
+                    twin_position: r.int_or_null("twin_position")?,
                     case: case_from_row(r)?,
                 })
             })
@@ -170,10 +171,10 @@ impl<B: Backend> Store for SqlStore<B> {
         row.map(|r| r.text("series")).transpose()
     }
 
-    async fn case_frames_json(&self, id: i64) -> StoreResult<Option<String>> {
-        let sql = "SELECT frames FROM results WHERE case_id = $1";
+    async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>> {
+        let sql = "SELECT snapshots FROM results WHERE case_id = $1";
         let row = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await?;
-        row.map(|r| r.text("frames")).transpose()
+        row.map(|r| r.text("snapshots")).transpose()
     }
 
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {

@@ -33,12 +33,14 @@ impl<B: Backend> SqlStore<B> {
             let (case_id, done) = self.enqueue(&mut tx, case, now).await?;
             cached += usize::from(done);
             sqlx::query(
-                "INSERT INTO sweep_cases (sweep_id, case_id, position, cached) VALUES ($1, $2, $3, $4)",
+                "INSERT INTO sweep_cases (sweep_id, case_id, position, cached, twin_position) \
+                 VALUES ($1, $2, $3, $4, $5)",
             )
             .bind(id)
             .bind(case_id)
             .bind(position as i64)
             .bind(i64::from(done))
+            .bind(case.twin_position.map(|p| p as i64))
             .execute(&mut *tx)
             .await?;
         }

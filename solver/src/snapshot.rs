@@ -1,6 +1,7 @@
-//! Frames: the snapshots of the knot a report keeps for viewers (the web
+//! Snapshots: the states of the knot a report keeps for viewers (the web
 //! page's 3D view, ParaView): the centre line with its per-node state and the
 //! loaded contacts with their forces. Taken only at samples, never per step.
+//! ("Frame" is kept for the rods' material and reference frames.)
 use crate::contact::gauss_seidel::ContactPoint;
 use crate::pipeline::World;
 use crate::rod::Rod;
@@ -9,9 +10,9 @@ use serde::{Deserialize, Serialize};
 
 /// A centreline snapshot. The per-node fields are single precision (they
 /// are for viewing, and keep the stored report small); they and `time` are
-/// empty or zero in frames stored before they were recorded.
+/// empty or zero in snapshots stored before they were recorded.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
+pub struct Snapshot {
     pub label: String,
     pub l_k_bar: f64,
     /// Simulated time since the case started, relaxation included (s).
@@ -29,19 +30,19 @@ pub struct Frame {
     /// Node velocities at the last step (m/s).
     #[serde(default)]
     pub velocity: Vec<[f32; 3]>,
-    /// The contacts carrying load at this frame (empty in frames stored before
-    /// they were recorded).
+    /// The contacts carrying load at this snapshot (empty in snapshots stored
+    /// before they were recorded).
     #[serde(default)]
-    pub contacts: Vec<FrameContact>,
+    pub contacts: Vec<SnapshotContact>,
 }
 
-/// A loaded contact of a frame: the closest points on the two segments (m),
+/// A loaded contact of a snapshot: the closest points on the two segments (m),
 /// the magnitude of the contact force (N) and its parts on the first
 /// segment's rod (`a`): normal (along the normal from `b` to `a`) and
 /// friction (tangential), and whether friction sticks (strictly inside the
 /// Coulomb cone) or slips (on its boundary).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FrameContact {
+pub struct SnapshotContact {
     pub a: [f64; 3],
     pub b: [f64; 3],
     pub force: f64,
@@ -57,7 +58,7 @@ pub struct FrameContact {
 /// (the contact solvers put a slipping force on the cone to round-off).
 const STICK_MARGIN: f64 = 1e-6;
 
-impl Frame {
+impl Snapshot {
     /// A snapshot of the world's (first) rod at simulated time `time`.
     pub fn capture(world: &World, label: &str, l_k_bar: f64, time: f64) -> Self {
         let rod = &world.rods[0];
@@ -67,7 +68,7 @@ impl Frame {
             .iter()
             .zip(world.contact_forces())
             .filter(|(_, f)| f.norm() > 0.0)
-            .map(|(c, f)| FrameContact::new(c, f, &points))
+            .map(|(c, f)| SnapshotContact::new(c, f, &points))
             .collect();
         Self {
             label: label.to_string(),
@@ -90,7 +91,7 @@ fn ends_repeated(rod: &Rod, f: &dyn Fn(usize) -> f64) -> Vec<f32> {
     (0..=last).map(|i| f(i.clamp(1, last - 1)) as f32).collect()
 }
 
-impl FrameContact {
+impl SnapshotContact {
     /// Contact `c` with force `f` (on A), at node positions `points`.
     fn new(c: &ContactPoint, f: &Vector3<f64>, points: &[Vector3<f64>]) -> Self {
         let [a0, a1, b0, b1] = c.nodes;
@@ -113,7 +114,7 @@ impl FrameContact {
 
 #[cfg(test)]
 mod tests {
-    use super::FrameContact;
+    use super::SnapshotContact;
     use crate::contact::gauss_seidel::ContactPoint;
     use crate::contact::segment::closest_points;
     use nalgebra::Vector3;
@@ -134,13 +135,13 @@ mod tests {
     #[test]
     fn splits_the_force_and_tells_stick_from_slip() {
         let (c, points) = crossing();
-        let stuck = FrameContact::new(&c, &Vector3::new(0.2, 0.0, 1.0), &points);
+        let stuck = SnapshotContact::new(&c, &Vector3::new(0.2, 0.0, 1.0), &points);
         assert_eq!(stuck.a, [0.0, 0.0, 1.0]);
         assert_eq!(stuck.b, [0.0, 0.0, 0.0]);
         assert_eq!(stuck.normal_force, [0.0, 0.0, 1.0]);
         assert_eq!(stuck.friction_force, [0.2, 0.0, 0.0]);
         assert!(stuck.stick);
-        let slipping = FrameContact::new(&c, &Vector3::new(0.0, 0.5, 1.0), &points);
+        let slipping = SnapshotContact::new(&c, &Vector3::new(0.0, 0.5, 1.0), &points);
         assert!(!slipping.stick);
         assert!((slipping.force - 1.25f64.sqrt()).abs() < 1e-15);
     }

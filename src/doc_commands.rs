@@ -1,0 +1,191 @@
+//! The documents' command lines and revision numbers, checked against the
+//! code: every `knotsweep ...` command in README.md, ARCHITECTURE.md,
+//! BENCHMARKS.md, python/README.md and docs/*.md parses with this binary's
+//! flags (a `run` or `snapshots` also passes the parameter table's
+//! validation, its start shape file read), and the physics revision that
+//! README.md and docs/API.md state is the code's.
+use crate::{Cli, Command};
+use clap::Parser;
+use clap::error::ErrorKind;
+use std::path::{Path, PathBuf};
+
+/// The documents whose commands are checked (CHANGELOG.md is history).
+fn documents() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = [
+        "README.md",
+        "ARCHITECTURE.md",
+        "BENCHMARKS.md",
+        "python/README.md",
+    ]
+    .iter()
+    .map(PathBuf::from)
+    .collect();
+    let mut docs: Vec<PathBuf> = std::fs::read_dir("docs")
+        .expect("docs/")
+        .map(|e| e.expect("a docs/ entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    docs.sort();
+    files.extend(docs);
+    files
+}
+
+/// The binary's subcommands, the words that make `knotsweep WORD` a command.
+const SUBCOMMANDS: [&str; 8] = [
+    "validate",
+    "run",
+    "reproduce",
+    "simplified",
+    "snapshots",
+    "serve",
+    "worker",
+    "sweep",
+];
+
+/// A command found in a document: where, and its arguments after `knotsweep`.
+#[derive(Debug)]
+struct Found {
+    at: String,
+    args: Vec<String>,
+}
+
+/// The arguments of the command starting at `text` (just after `knotsweep `):
+/// up to a shell operator, a comment or the end.
+fn arguments(text: &str) -> Vec<String> {
+    text.split_whitespace()
+        .take_while(|t| !matches!(*t, "|" | ">" | "&&" | "||" | ";" | "#" | "\\" | "2>&1"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// `knotsweep SUBCOMMAND ...` and `cargo run --release -- SUBCOMMAND ...`
+/// commands in `text` (a code span or a line of a code block).
+fn commands_in(text: &str, at: &str, found: &mut Vec<Found>) {
+    for prefix in ["knotsweep ", "cargo run --release -- ", "cargo run -- "] {
+        let mut rest = text;
+        while let Some(i) = rest.find(prefix) {
+            let before = rest[..i].chars().next_back();
+            let after = &rest[i + prefix.len()..];
+            rest = after;
+            if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == '-' || c == '/' || c == '.') {
+                continue;
+            }
+            let args = arguments(after);
+            if args.first().is_some_and(|w| SUBCOMMANDS.contains(&w.as_str())) {
+                found.push(Found {
+                    at: at.to_string(),
+                    args,
+                });
+            }
+        }
+    }
+}
+
+/// Every command of a markdown document: in its code blocks' lines and its
+/// inline code spans.
+fn commands(path: &Path) -> Vec<Found> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut found = Vec::new();
+    let mut in_block = false;
+    for (k, line) in text.lines().enumerate() {
+        let at = format!("{}:{}", path.display(), k + 1);
+        if line.trim_start().starts_with("```") {
+            in_block = !in_block;
+            continue;
+        }
+        if in_block {
+            commands_in(line, &at, &mut found);
+            continue;
+        }
+        for (i, span) in line.split('`').enumerate() {
+            if i % 2 == 1 {
+                commands_in(span, &at, &mut found);
+            }
+        }
+    }
+    found
+}
+
+/// Why a found command does not hold, if it does not.
+fn problem(f: &Found) -> Option<String> {
+    let argv = std::iter::once("knotsweep".to_string()).chain(f.args.iter().cloned());
+    let cli = match Cli::try_parse_from(argv) {
+        Ok(cli) => cli,
+        // `--help` is a command that works; a bare subcommand in prose names it.
+        Err(e) if e.kind() == ErrorKind::DisplayHelp => return None,
+        Err(e)
+            if f.args.len() == 1
+                && matches!(
+                    e.kind(),
+                    ErrorKind::MissingRequiredArgument | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+                ) =>
+        {
+            return None;
+        }
+        Err(e) => return Some(e.to_string().lines().next().unwrap_or_default().to_string()),
+    };
+    let flags = match cli.command {
+        Command::Run(args) => args.params,
+        Command::Snapshots(args) => args.params,
+        _ => return None,
+    };
+    let params = match flags.params() {
+        Ok(p) => p,
+        Err(e) => return Some(format!("{e:#}")),
+    };
+    params.validate().err().map(|errors| {
+        errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("; ")
+    })
+}
+
+#[test]
+fn every_documented_command_parses_and_its_case_is_valid() {
+    let found: Vec<Found> = documents().iter().flat_map(|p| commands(p)).collect();
+    assert!(found.len() > 40, "commands found: {}", found.len());
+    let problems: Vec<String> = (found.iter())
+        .filter_map(|f| problem(f).map(|p| format!("{}: knotsweep {}\n  {p}", f.at, f.args.join(" "))))
+        .collect();
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn a_broken_command_is_caught() {
+    let mut found = Vec::new();
+    commands_in(
+        "cargo run --release -- run --n 3 --mu -1 | tee log; knotsweep sweep --no-such-flag",
+        "here",
+        &mut found,
+    );
+    assert_eq!(found.len(), 2, "{found:?}");
+    assert_eq!(found[0].args, ["sweep", "--no-such-flag"]);
+    assert_eq!(found[1].args, ["run", "--n", "3", "--mu", "-1"]);
+    assert!(problem(&found[0]).is_some(), "an unknown flag");
+    assert!(problem(&found[1]).unwrap().contains("mu"), "a value out of range");
+}
+
+/// The physics revision that README.md and docs/API.md state, every time
+/// they state one, is the code's.
+#[test]
+fn documents_state_the_codes_physics_revision() {
+    let current = solver::case::PHYSICS_REVISION.to_string();
+    for path in ["README.md", "docs/API.md", "python/README.md"] {
+        let text = std::fs::read_to_string(path).expect(path);
+        let lower = text.to_lowercase();
+        for key in ["physics revision ", "\"physics_revision\": "] {
+            for (i, _) in lower.match_indices(key) {
+                let digits: String = lower[i + key.len()..]
+                    .chars()
+                    .take_while(char::is_ascii_digit)
+                    .collect();
+                assert!(
+                    digits.is_empty() || digits == current,
+                    "{path} states physics revision {digits}; the code's is {current}"
+                );
+            }
+        }
+    }
+}

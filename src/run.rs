@@ -376,20 +376,36 @@ fn summarise(report: &CaseReport) {
         s.contact_time,
         s.dynamics_time
     );
-    let stages: Vec<String> = report
-        .stages
+    let phases: Vec<String> = report
+        .phases
         .iter()
         .map(|span| {
+            let stage = span.stage.map_or(String::new(), |i| format!("stage {} ", i + 1));
             format!(
-                "{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps)",
-                span.stage,
-                span.from_l_k_bar,
-                span.to_l_k_bar,
-                span.steps,
-                span.newton_iterations,
-                span.contact_sweeps
+                "{stage}{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps)",
+                span.phase, span.from_l_k_bar, span.to_l_k_bar, span.steps, span.newton_iterations, span.contact_sweeps
             )
         })
         .collect();
-    println!("stages in l_k bar: {}", stages.join(", "));
+    println!("phases in l_k bar: {}", phases.join(", "));
+    for e in &report.events {
+        println!(
+            "stage {} ({}): {} at l_k bar {:.2}, F bar {:.4} -> {:.4}, H bar {:.3} -> {:.3}{}",
+            e.stage + 1,
+            report.params.program()[e.stage].name(),
+            e.kind,
+            e.at.l_k_bar,
+            e.at.f_bar_before,
+            e.at.f_bar_after,
+            e.at.h_bar_before,
+            e.at.h_bar_after,
+            if e.clean { "" } else { " (not a clean snap)" }
+        );
+    }
+    if let Some(h) = &report.hysteresis {
+        println!(
+            "hysteresis: inverts at l_k bar {:.2} tightening, flips back at {:.2} loosening: width {:.2}",
+            h.inversion_l_k_bar, h.flip_back_l_k_bar, h.width
+        );
+    }
 }

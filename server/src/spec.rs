@@ -117,18 +117,28 @@ fn numbers(values: &[f64]) -> Vec<Value> {
 /// F bar series away from the snap is then the fast approach's (about 5 %
 /// high).
 pub fn presets() -> Vec<Preset> {
-    let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
+    let grid = |name: &str, description: &str, base: Value, axes: Vec<(&str, Vec<Value>)>| {
         let base = base.as_object().cloned().expect("a preset's base is an object");
         let base_params: CaseParams =
             serde_json::from_value(Value::Object(base.clone())).expect("preset base is valid");
-        let cases = values.len();
+        let cases = axes.iter().map(|(_, v)| v.len()).product();
         Preset {
             name: name.to_string(),
             description: description.to_string(),
             base,
-            grid: BTreeMap::from([(axis.to_string(), values)]),
+            grid: axes.into_iter().map(|(a, v)| (a.to_string(), v)).collect(),
             base_params: serde_json::to_value(base_params).expect("params serialise"),
             cases,
+        }
+    };
+    let make = |name: &str, description: &str, base: Value, axis: &str, values: Vec<Value>| {
+        grid(name, description, base, vec![(axis, values)])
+    };
+    let turns = |t: f64| {
+        if t == 0.0 {
+            serde_json::json!([{"pull": {}}])
+        } else {
+            serde_json::json!([{"rotate": {"turns": t, "ends": "one"}}, {"pull": {}}])
         }
     };
     vec![
@@ -153,7 +163,51 @@ pub fn presets() -> Vec<Preset> {
             "mu",
             numbers(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
         ),
+        grid(
+            "hysteresis",
+            "Paper Sec. 5's hysteresis: tightened past the snap, then loosened back to the start; the loop flips back \
+             (n = 2 ... 5, h = 1.6 mm, mu = 0.1, gravity off and on, -z)",
+            serde_json::json!({"h": 1.6e-3, "mu": 0.1, "loading": [{"pull": {}}, {"release": {}}]}),
+            vec![
+                ("n", (2..=5).map(Value::from).collect()),
+                ("gravity", vec![serde_json::json!([0.0, 0.0, 0.0]), serde_json::json!([0.0, 0.0, -9.81])]),
+            ],
+        ),
+        make(
+            "twist",
+            "The ends' relative rotation (paper Sec. 2): the finish clamp turned by -2 ... 2 turns, then pulled \
+             (n = 3, h = 1.6 mm, mu = 0.1)",
+            serde_json::json!({"n": 3, "h": 1.6e-3, "mu": 0.1}),
+            "loading",
+            [-2.0, -1.0, 0.0, 1.0, 2.0].map(turns).to_vec(),
+        ),
+        make(
+            "materials",
+            "Inversion does not depend on E or rho (paper Sec. 4): one knot (n = 3, h = 1.6 mm, L = 1 m, mu = 0.1) \
+             in rubber, silicone, nylon, nitinol and steel (nu changes the twisting stiffness GJ/EI = 1/(1 + nu))",
+            serde_json::json!({"n": 3, "h": 1.6e-3, "length": 1.0, "mu": 0.1}),
+            MATERIAL_AXIS,
+            solver::case::MATERIALS.iter().map(|m| Value::from(m.name)).collect(),
+        ),
     ]
+}
+
+/// A grid axis that is not a parameter: a named material
+/// (`solver::case::MATERIALS`), setting `youngs_modulus`, `density` and
+/// `poisson_ratio` together.
+pub const MATERIAL_AXIS: &str = "material";
+
+/// The parameters a grid value of `axis` sets: the value itself, or a named
+/// material's three constants.
+fn axis_values(axis: &str, value: &Value) -> Vec<(String, Value)> {
+    match (axis, value.as_str().and_then(solver::case::material)) {
+        (MATERIAL_AXIS, Some(m)) => vec![
+            ("youngs_modulus".to_string(), Value::from(m.youngs_modulus)),
+            ("density".to_string(), Value::from(m.density)),
+            ("poisson_ratio".to_string(), Value::from(m.poisson_ratio)),
+        ],
+        _ => vec![(axis.to_string(), value.clone())],
+    }
 }
 
 pub fn preset(name: &str) -> Option<Preset> {
@@ -233,6 +287,16 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     }
     let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
     let axes = check_grid(grid, &names, &mut errors);
+    if axes.iter().any(|(a, _)| a == MATERIAL_AXIS) {
+        for (name, _) in axis_values(MATERIAL_AXIS, &Value::from(solver::case::MATERIALS[0].name)) {
+            if base.contains_key(&name) || axes.iter().any(|(a, _)| *a == name) {
+                errors.push(FieldError::new(
+                    format!("base.{name}"),
+                    "the grid's material axis sets it: give either the material or the constants",
+                ));
+            }
+        }
+    }
     let count = axes
         .iter()
         .fold(1usize, |n, (_, values)| n.saturating_mul(values.len()));
@@ -326,6 +390,19 @@ fn check_grid(
 ) -> Vec<(String, Vec<Value>)> {
     let mut axes = Vec::new();
     for (axis, values) in grid.into_iter().flatten() {
+        if axis == MATERIAL_AXIS {
+            let known: Vec<&str> = solver::case::MATERIALS.iter().map(|m| m.name).collect();
+            for (i, v) in values.iter().enumerate() {
+                if !v.as_str().is_some_and(|name| known.contains(&name)) {
+                    errors.push(FieldError::new(
+                        format!("grid.{axis}[{i}]"),
+                        format!("unknown material {v}; known: {}", known.join(", ")),
+                    ));
+                }
+            }
+            axes.push((axis.clone(), values.clone()));
+            continue;
+        }
         if !names.contains(axis) {
             errors.push(FieldError::new(
                 format!("grid.{axis}"),
@@ -372,7 +449,7 @@ fn cartesian(
         let mut object = base.clone();
         let mut varied = Vec::with_capacity(axes.len());
         for ((axis, values), &i) in axes.iter().zip(&index) {
-            object.insert(axis.clone(), values[i].clone());
+            object.extend(axis_values(axis, &values[i]));
             varied.push((axis.clone(), values[i].clone()));
         }
         match serde_json::from_value::<CaseParams>(Value::Object(object)) {

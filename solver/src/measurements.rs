@@ -74,6 +74,27 @@ pub struct Sample {
     pub e_bend_bar: f64,
     #[serde(rename = "E_twist_bar", default)]
     pub e_twist_bar: f64,
+    /// The elastic energy over EI / h of the braid's two strands, from each
+    /// run's first contact to the loop's ends P and Q, and of the loop
+    /// strictly between P and Q (by node, `energies::within`; 0 when no braid
+    /// is found).
+    #[serde(rename = "E_braid_bar", default)]
+    pub e_braid_bar: f64,
+    #[serde(rename = "E_loop_bar", default)]
+    pub e_loop_bar: f64,
+    /// The linking number Lk = Tw + Wr of the centre line closed along the
+    /// pull axis (turns).
+    #[serde(rename = "Lk", default)]
+    pub lk: f64,
+    /// How far the clamps have turned against each other (turns), and the
+    /// torque they apply about the pull axis over EI / h.
+    #[serde(default)]
+    pub end_turns: f64,
+    #[serde(rename = "M_bar", default)]
+    pub m_bar: f64,
+    /// Index of the loading program's stage the sample was taken in.
+    #[serde(default)]
+    pub stage: usize,
 }
 
 impl Sample {
@@ -93,7 +114,7 @@ pub enum Column {
 /// The series' columns in order, by the names of the CSV header (and of
 /// the Python binding's arrays), which are `Sample`'s JSON names: one per
 /// field.
-pub const COLUMNS: [(&str, Column); 19] = [
+pub const COLUMNS: [(&str, Column); 25] = [
     ("time", Column::Real(|s| s.time)),
     ("l_k_bar", Column::Real(|s| s.l_k_bar)),
     ("l_c_over_L", Column::Real(|s| s.l_c_over_l)),
@@ -119,6 +140,12 @@ pub const COLUMNS: [(&str, Column); 19] = [
     ("E_stretch_bar", Column::Real(|s| s.e_stretch_bar)),
     ("E_bend_bar", Column::Real(|s| s.e_bend_bar)),
     ("E_twist_bar", Column::Real(|s| s.e_twist_bar)),
+    ("E_braid_bar", Column::Real(|s| s.e_braid_bar)),
+    ("E_loop_bar", Column::Real(|s| s.e_loop_bar)),
+    ("Lk", Column::Real(|s| s.lk)),
+    ("end_turns", Column::Real(|s| s.end_turns)),
+    ("M_bar", Column::Real(|s| s.m_bar)),
+    ("stage", Column::Count(|s| s.stage as u64)),
 ];
 
 /// The series as CSV: a header of [`COLUMNS`]' names, one row per sample.
@@ -391,6 +418,64 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
             f_bar_after: f_after,
             h_bar_before: before.h_bar,
             h_bar_after: drop.h_bar,
+            kinetic_energy_ratio: ratio,
+            sample: j - 1,
+        });
+    }
+    None
+}
+
+/// The loop flipping back while the knot loosens (l_k bar increasing): the
+/// first sample whose H bar has risen to at least `1 / drop_fraction` times
+/// the smallest H bar of the samples within `window` before it, confirmed by
+/// the kinetic energy from that smallest-H sample to a few samples after
+/// exceeding `kinetic_energy_spike` times its median over the samples
+/// before. The mirror of [`detect_inversion`]: a loop that lay flat after
+/// the inversion stands up again on the other side.
+pub fn detect_flip_back(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
+    for j in 1..series.len() {
+        let rise = &series[j];
+        if rise.width <= 0.0 || rise.l_k_bar - series[0].l_k_bar < criteria.window {
+            continue;
+        }
+        let Some((start, reference)) = series[..j]
+            .iter()
+            .enumerate()
+            .rev()
+            .take_while(|(_, s)| rise.l_k_bar - s.l_k_bar <= criteria.window)
+            .filter(|(_, s)| s.width > 0.0)
+            .map(|(i, s)| (i, s.h_bar))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            continue;
+        };
+        if reference <= 0.0 || rise.h_bar * criteria.drop_fraction < reference {
+            continue;
+        }
+        let before = &series[j - 1];
+        let lo = start.saturating_sub(20);
+        let mut ke: Vec<f64> = series[lo..start.max(lo + 1)]
+            .iter()
+            .map(|s| s.kinetic_energy)
+            .collect();
+        ke.sort_by(f64::total_cmp);
+        let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
+        let hi = (j + 4).min(series.len());
+        let peak = series[start..hi]
+            .iter()
+            .map(|s| s.kinetic_energy)
+            .fold(0.0, f64::max);
+        let ratio = peak / median;
+        if ratio < criteria.kinetic_energy_spike {
+            continue;
+        }
+        return Some(Inversion {
+            l_k_bar: before.l_k_bar,
+            l_c_over_l: before.l_c_over_l,
+            f_bar_before: before.f_bar,
+            f_bar_after: rise.f_bar,
+            h_bar_before: before.h_bar,
+            h_bar_after: rise.h_bar,
             kinetic_energy_ratio: ratio,
             sample: j - 1,
         });

@@ -99,6 +99,11 @@ impl TimeStep {
         self.dt = self.dt.clamp(self.options.dt_min, dt_max);
     }
 
+    /// The step the next [`TimeStep::advance`] tries first (s).
+    pub fn next_dt(&self) -> f64 {
+        self.dt
+    }
+
     /// Advances `world` by one accepted step.
     pub fn advance(&mut self, world: &mut World) -> Result<Advance, WorldError> {
         let o = self.options;

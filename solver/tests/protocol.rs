@@ -1,7 +1,7 @@
 //! The pull protocols (`solver::case::Protocol`): the adaptive pull finds
 //! the reference pull's inversion in far fewer steps.
 use solver::case::{CaseParams, Protocol};
-use solver::protocol::{self, Stage, Status};
+use solver::protocol::{self, Phase, PhaseSpan, Status};
 
 /// On the default n = 3 case (K = 301, mu = 0.1), the adaptive pull's
 /// inversion is within 1 % of the reference pull's, it takes under a third
@@ -66,15 +66,15 @@ fn above_its_friction_limit_the_adaptive_pull_is_the_reference() {
     assert_eq!(adaptive.status, Status::Completed, "{}", adaptive.reason);
     assert!(adaptive.series.len() > 10, "{} samples", adaptive.series.len());
     assert_eq!(adaptive.series, reference.series);
-    let stages: Vec<Stage> = adaptive.stages.iter().map(|s| s.stage).collect();
-    assert_eq!(stages, [Stage::Settle, Stage::Reference]);
+    let phases: Vec<Phase> = adaptive.phases.iter().map(|s| s.phase).collect();
+    assert_eq!(phases, [Phase::Settle, Phase::Reference]);
 }
 
-/// The stages' counters add up to the run's: every step, Newton iteration
-/// and contact sweep of the pull falls in exactly one stage, and the
-/// relaxation's steps in the settling stages.
+/// The phases' counters add up to the run's: every step, Newton iteration
+/// and contact sweep of the pull falls in exactly one phase, and the
+/// relaxation's steps in the settling phases.
 #[test]
-fn the_stages_count_every_step_once() {
+fn the_phases_count_every_step_once() {
     let params = CaseParams {
         nodes: Some(158),
         min_l_k_bar: 300.0,
@@ -82,11 +82,11 @@ fn the_stages_count_every_step_once() {
     };
     let report = protocol::run(&params, &mut |_| true);
     assert_eq!(report.status, Status::Completed, "{}", report.reason);
-    let (settling, pulling): (Vec<_>, Vec<_>) = report.stages.iter().partition(|s| s.stage == Stage::Settle);
-    let sum = |spans: &[&protocol::StageSpan], f: fn(&protocol::StageSpan) -> u64| {
+    let (settling, pulling): (Vec<_>, Vec<_>) = report.phases.iter().partition(|s| s.phase == Phase::Settle);
+    let sum = |spans: &[&PhaseSpan], f: fn(&PhaseSpan) -> u64| {
         spans.iter().map(|s| f(s)).sum::<u64>()
     };
-    assert!(!pulling.is_empty(), "{:?}", report.stages);
+    assert!(!pulling.is_empty(), "{:?}", report.phases);
     assert_eq!(sum(&pulling, |s| s.steps), report.stats.steps);
     assert_eq!(
         sum(&pulling, |s| s.newton_iterations),

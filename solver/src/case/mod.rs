@@ -12,7 +12,7 @@ mod table;
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
 use crate::knot::{KnotSpec, StartShape};
 use crate::words::display_as_word;
-pub use loading::{Direction, Ends, LoadStage, Soft, Target, default_program};
+pub use loading::{Direction, Ends, Hold, LoadStage, Rotate, Soft, Target, default_program};
 pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};
@@ -115,7 +115,8 @@ impl CaseParams {
             return Err(errors);
         }
         let start = if self.initial_shape.is_some() {
-            self.start_shape().map(|s| self.l_k_bar_of(&s))
+            let shape = self.start_shape().map_err(|e| vec![e])?;
+            return self.loading_error(&shape).map_or(Ok(()), |e| Err(vec![e]));
         } else {
             let spec = self.knot_spec();
             match checks.0.iter().find(|(s, _)| *s == spec) {
@@ -128,7 +129,7 @@ impl CaseParams {
             }
         };
         let start = start.map_err(|e| vec![e])?;
-        self.loading_error(start).map_or(Ok(()), |e| Err(vec![e]))
+        self.program_error(start, true).map_or(Ok(()), |e| Err(vec![e]))
     }
 
     /// The checks of [`CaseParams::validate`] and the start shape in one
@@ -139,7 +140,7 @@ impl CaseParams {
             return Err(errors);
         }
         let start = self.start_shape().map_err(|e| vec![e])?;
-        if let Some(e) = self.loading_error(self.l_k_bar_of(&start)) {
+        if let Some(e) = self.loading_error(&start) {
             return Err(vec![e]);
         }
         Ok(ValidCase {
@@ -158,16 +159,30 @@ impl CaseParams {
         (self.length - span.norm()) / self.h
     }
 
+    /// Why the loading program cannot run from `start`, if it cannot.
+    fn loading_error(&self, start: &StartShape) -> Option<ParamError> {
+        let span = start.points[start.points.len() - 1] - start.points[0];
+        let along_x = span.y.abs().max(span.z.abs()) <= 1e-9 * span.norm();
+        self.program_error(self.l_k_bar_of(start), along_x)
+    }
+
     /// Why the loading program cannot run from a knot starting at l_k bar
-    /// `start` ([`loading::check`]), if it cannot.
-    fn loading_error(&self, start: f64) -> Option<ParamError> {
+    /// `start` ([`loading::check`]), or with soft stages on a knot not
+    /// pulled along x (its springs act along x), if it cannot.
+    fn program_error(&self, start: f64, along_x: bool) -> Option<ParamError> {
         let program = self.loading.as_deref()?;
-        loading::check(program, start, self.length / self.h)
-            .err()
-            .map(|reason| ParamError {
-                field: "loading".to_string(),
-                reason,
-            })
+        let soft = program.iter().any(|s| matches!(s, LoadStage::Soft(_)));
+        let reason = if soft && !along_x {
+            Err("a soft stage needs the clamps on the x axis, as the builder's knots are: this initial_shape's \
+                 ends are not"
+                .to_string())
+        } else {
+            loading::check(program, start, self.length / self.h)
+        };
+        reason.err().map(|reason| ParamError {
+            field: "loading".to_string(),
+            reason,
+        })
     }
 
     /// The loading program: `loading`, or one tightening.

@@ -77,8 +77,17 @@ fn solid_angle(p1: &Vector3<f64>, p2: &Vector3<f64>, p3: &Vector3<f64>, p4: &Vec
 /// tangent turns to its antipode, so that a time step's small change costs
 /// O(K) where [`writhe`] costs O(K^2).
 pub fn writhe_change(before: &[Vector3<f64>], after: &[Vector3<f64>]) -> f64 {
+    // tan(Omega / 2) = x: a step's triangles are small, where the series of
+    // atan to x^5 is exact to rounding (|x| < 1e-3) and costs no atan.
     let triangle = |a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>| {
-        2.0 * a.dot(&b.cross(c)).atan2(1.0 + a.dot(b) + b.dot(c) + c.dot(a))
+        let (num, den) = (a.dot(&b.cross(c)), 1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+        let x = num / den;
+        if den > 0.0 && x.abs() < 1e-3 {
+            let x2 = x * x;
+            2.0 * x * (1.0 - x2 * (1.0 / 3.0 - x2 / 5.0))
+        } else {
+            2.0 * num.atan2(den)
+        }
     };
     let mut area = 0.0;
     for e in 0..before.len().saturating_sub(1) {

@@ -310,6 +310,12 @@ impl World {
         self.bodies.iter_mut().for_each(|b| b.stepper.rollback());
     }
 
+    /// Makes every stepper assemble a new Newton matrix at its next step:
+    /// after a rod's constraints or springs change.
+    pub fn forget_factorizations(&mut self) {
+        self.bodies.iter_mut().for_each(|b| b.stepper.forget_factorization());
+    }
+
     /// The largest rod radius (the scale of contact tolerances).
     pub fn largest_radius(&self) -> f64 {
         self.rods.iter().map(|r| r.section.radius).fold(0.0, f64::max)

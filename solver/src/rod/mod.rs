@@ -71,6 +71,8 @@ pub struct RodState {
     tangent: Vec<Vector3<f64>>,
     d1: Vec<Vector3<f64>>,
     ref_twist: Vec<f64>,
+    /// The springs' anchors.
+    anchors: Vec<f64>,
 }
 
 impl RodState {
@@ -421,6 +423,8 @@ impl Rod {
         state.tangent.clone_from(&self.tangent_old);
         state.d1.clone_from(&self.d1_old);
         state.ref_twist.clone_from(&self.ref_twist_old);
+        state.anchors.clear();
+        state.anchors.extend(self.springs.iter().map(|s| s.anchor));
     }
 
     /// Returns to a state saved by [`Rod::save_state`] on this rod.
@@ -431,6 +435,9 @@ impl Rod {
         self.tangent_old.copy_from_slice(&state.tangent);
         self.d1_old.copy_from_slice(&state.d1);
         self.ref_twist_old.copy_from_slice(&state.ref_twist);
+        for (spring, anchor) in self.springs.iter_mut().zip(&state.anchors) {
+            spring.anchor = *anchor;
+        }
         self.update_geometry();
     }
 

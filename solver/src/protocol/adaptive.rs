@@ -1,0 +1,318 @@
+//! [`Protocol::Adaptive`]: a pull or release runs fast far from its events
+//! and at `pull_speed` through them. Fast, the clamps ramp up to
+//! `FAST_FACTOR` times `pull_speed`, damped as in the relaxation but sparing
+//! the sliding along the rod (`external::sliding`), with steps up to
+//! `FAST_DT_FACTOR` times the case's and a checkpoint every
+//! `CHECKPOINT_SPACING` in l_k bar. When an event is detected the stage goes
+//! back to the checkpoint `RESTART_BEFORE` before it, lets the knot settle
+//! with the clamps held, and moves through the event at `pull_speed` with the
+//! case's damping and step, fast again from `SLOW_AFTER` past it. Each phase
+//! of this schedule is a [`Phase`].
+use super::report::PhaseSpan;
+use crate::case::{CaseParams, Protocol};
+use crate::measurements::Sample;
+use crate::words::display_as_word;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+/// The largest friction coefficient the adaptive pull runs fast at; above it
+/// the whole stage is the reference's. Every Fig. 11 case (h = 3.4 mm, mu =
+/// 0.1 ... 0.7) snaps cleanly and the adaptive pull lands within 0.3 % of the
+/// reference's at each (BENCHMARKS.md); larger frictions were not measured.
+pub const ADAPTIVE_MAX_MU: f64 = 0.7;
+/// The largest simulated pull rate, over the paper's rod's, the adaptive pull
+/// runs fast at; above it the whole stage is the reference's. Its fast
+/// approach is quasi-static enough at the paper's rate (the inversion within
+/// 0.2 % of the reference's); at 3.3 times that rate (the paper's rod at
+/// 1 cm/s with its physical inertia) it lands 0.5 % from the reference pull
+/// at that rate (BENCHMARKS.md, "Any rod", the rates table). The default
+/// pull and mass scaling bring every rod to the paper's rate.
+pub const ADAPTIVE_MAX_RATE: f64 = 3.5;
+
+/// Speed-up far from events.
+pub(super) const FAST_FACTOR: f64 = 16.0;
+/// The largest time step while fast or settling, over the case's.
+pub(super) const FAST_DT_FACTOR: f64 = 4.0;
+/// Checkpoint spacing in l_k bar while fast.
+pub(super) const CHECKPOINT_SPACING: f64 = 2.0;
+/// How far (l_k bar) before the fast pull's event the slow pull restarts (the
+/// fast pull snaps late: n = 3 by 3, n = 5 by 5), and how much further back
+/// each retry goes. The slow pull needs a few l_k bar to take over from the
+/// settled state: restarting 6 before moved n = 3's inversion by -0.65 % and
+/// n = 5's by -0.91 %, 8 before n = 3's by -0.17 % (CHANGELOG.md, physics
+/// revision 7).
+pub(super) const RESTART_BEFORE: f64 = 8.0;
+/// A slow pull that snaps within this much l_k bar of its restart started
+/// past the fold, and is retried from further back.
+pub(super) const MIN_LEAD: f64 = 2.0;
+/// How far (l_k bar) past the event the pull stays slow.
+pub(super) const SLOW_AFTER: f64 = 1.0;
+/// Clamp speed over `pull_speed` through the event: the reference's.
+const SNAP_FACTOR: f64 = 1.0;
+/// The contact solve's tolerance while fast, when the case's is tighter.
+const FAST_CONTACT_TOLERANCE: f64 = 1e-4;
+/// The approach ramps its speed up over this much l_k bar (a sudden start
+/// shakes the knot), the phase after the event over `RAMP_AFTER`.
+const RAMP: f64 = 4.0;
+const RAMP_AFTER: f64 = 2.0;
+/// Longest settling (s, in the case's time unit) after going back to a
+/// checkpoint.
+pub(super) const SETTLE_TIME: f64 = 0.5;
+/// How far (l_k bar) past the fast pull's event the slow phase goes on
+/// without one before it takes that event for the fast pull's own swinging
+/// and approaches fast again.
+pub(super) const FALSE_ALARM: f64 = 10.0;
+/// How much of a stage's end (l_k bar) is redone slowly when the fast
+/// approach reaches it without an event (its lag and swinging may hide one
+/// there).
+pub(super) const END_REVIEW: f64 = 20.0;
+/// A fall of H bar to `SMEARED_FALL` of its largest value within
+/// `SMEARED_WINDOW` (l_k bar), from `SMEARED_START` of it over more than
+/// `SMEARED_SPAN`, is a snap the fast approach smeared out ([`smeared_snap`]).
+/// Steady tightening lowers H bar by about 10 % over the window (n = 3: 0.59
+/// at l_k bar 431 to 0.24 at 141).
+const SMEARED_FALL: f64 = 0.4;
+const SMEARED_START: f64 = 0.9;
+const SMEARED_WINDOW: f64 = 20.0;
+const SMEARED_SPAN: f64 = 5.0;
+/// Checkpoints kept (they span several retries of `RESTART_BEFORE`).
+pub(super) const CHECKPOINTS: usize = 24;
+/// Damping rate (1/s, over the case's time unit) while relaxing and settling.
+pub(super) const RELAX_DAMPING: f64 = 20.0;
+
+/// Whether `params` pull and release fast far from events:
+/// [`Protocol::Adaptive`] up to [`ADAPTIVE_MAX_MU`] and [`ADAPTIVE_MAX_RATE`].
+pub fn pulls_fast(params: &CaseParams) -> bool {
+    params.protocol == Protocol::Adaptive
+        && params.mu <= ADAPTIVE_MAX_MU
+        && params.scales().pull_rate_ratio <= ADAPTIVE_MAX_RATE
+}
+
+/// What the solver is doing in a stretch of a stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Damped, with the clamps held, after the knot is built or after going
+    /// back to a checkpoint.
+    Settle,
+    /// At `pull_speed` throughout ([`Protocol::Reference`], soft stages).
+    Reference,
+    /// Fast, checkpointing, until an event is detected.
+    Approach,
+    /// From a checkpoint through the event.
+    Snap,
+    /// Fast again, `SLOW_AFTER` past the event.
+    After,
+    /// The clamps held still (a hold stage).
+    Hold,
+    /// The clamps turning (a rotate stage).
+    Rotate,
+}
+
+display_as_word!(Phase);
+
+impl Phase {
+    /// Clamp speed over `pull_speed`, `pulled` (in l_k bar) into the phase:
+    /// the fast phases ramp up from the snap speed over `RAMP` (the approach)
+    /// or `RAMP_AFTER` (after the event).
+    pub(super) fn speed(self, pulled: f64) -> f64 {
+        match self {
+            Phase::Settle | Phase::Hold | Phase::Rotate => 0.0,
+            Phase::Reference => 1.0,
+            Phase::Snap => SNAP_FACTOR,
+            Phase::Approach => ramp(pulled / RAMP),
+            Phase::After => ramp(pulled / RAMP_AFTER),
+        }
+    }
+
+    /// The damping rate (1/s) given the case's and the relaxation's: the fast
+    /// phases damp like the relaxation, so that the knot follows the clamps
+    /// without swinging (sparing the sliding along the rod,
+    /// [`Phase::spares_sliding`]).
+    pub(super) fn damping(self, case: f64, relax: f64) -> f64 {
+        match self {
+            Phase::Reference | Phase::Snap | Phase::Hold | Phase::Rotate => case,
+            Phase::Settle | Phase::Approach | Phase::After => case.max(relax),
+        }
+    }
+
+    /// Whether the damping spares sliding along the centre line
+    /// (`sliding::exempt_sliding`): in the fast phases, where a drag on the
+    /// material drawn through the knot would read as clamp force.
+    pub(super) fn spares_sliding(self) -> bool {
+        matches!(self, Phase::Approach | Phase::After)
+    }
+
+    /// The largest time step given the case's.
+    pub(super) fn dt_max(self, case: f64) -> f64 {
+        match self {
+            Phase::Reference | Phase::Snap | Phase::Hold | Phase::Rotate => case,
+            Phase::Settle | Phase::Approach | Phase::After => case * FAST_DT_FACTOR,
+        }
+    }
+
+    /// The contact solve's tolerance given the case's.
+    pub(super) fn contact_tolerance(self, case: f64) -> f64 {
+        match self {
+            Phase::Approach | Phase::After => case.max(FAST_CONTACT_TOLERANCE),
+            _ => case,
+        }
+    }
+}
+
+/// From the snap speed (0) to the fast one (1).
+fn ramp(fraction: f64) -> f64 {
+    SNAP_FACTOR + (FAST_FACTOR - SNAP_FACTOR) * fraction.clamp(0.0, 1.0)
+}
+
+/// Which way a stage moves l_k bar: `+1` tightening (l_k bar falls), `-1`
+/// loosening. "Before" and "after" are along the stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Way(pub f64);
+
+impl Way {
+    /// `l` has reached `mark` along the stage.
+    pub(super) fn reached(self, l: f64, mark: f64) -> bool {
+        if self.0 > 0.0 { l <= mark } else { l >= mark }
+    }
+
+    /// `l` has gone beyond `mark` along the stage.
+    pub(super) fn past(self, l: f64, mark: f64) -> bool {
+        if self.0 > 0.0 { l < mark } else { l > mark }
+    }
+
+    /// `d` in l_k bar back towards the stage's start from `l`.
+    pub(super) fn back(self, l: f64, d: f64) -> f64 {
+        if self.0 > 0.0 { l + d } else { l - d }
+    }
+
+    /// `d` in l_k bar on from `l`.
+    pub(super) fn on(self, l: f64, d: f64) -> f64 {
+        if self.0 > 0.0 { l - d } else { l + d }
+    }
+
+    /// How far along the stage `l` lies from `start`.
+    pub(super) fn along(self, start: f64, l: f64) -> f64 {
+        if self.0 > 0.0 { start - l } else { l - start }
+    }
+}
+
+/// A snap the damped fast approach of a tightening smeared out: H bar has
+/// fallen below `SMEARED_FALL` of its largest value within the last
+/// `SMEARED_WINDOW` of l_k bar, over more than `SMEARED_SPAN` (a sudden drop
+/// is `measurements::detect_inversion`'s). Returns where the fall began (the
+/// last sample within `SMEARED_START` of that largest value: the fold lies
+/// after it) and where H bar is now. The damping slows the snap down while the
+/// clamps go on moving, so that it spans many samples without the sudden drop
+/// that detection looks for (n = 5: H bar 0.18 -> 0.07 over about 20 l_k bar,
+/// where the reference pull snaps at once).
+pub(super) fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
+    let last = series.last().filter(|s| s.h_bar > 0.0)?;
+    let window = || (series.iter().rev()).take_while(|s| s.l_k_bar <= last.l_k_bar + SMEARED_WINDOW);
+    let peak = window().map(|s| s.h_bar).fold(0.0, f64::max);
+    if last.h_bar >= SMEARED_FALL * peak {
+        return None;
+    }
+    let began = window().find(|s| s.h_bar >= SMEARED_START * peak)?.l_k_bar;
+    (began - last.l_k_bar > SMEARED_SPAN).then_some((began, last.l_k_bar))
+}
+
+/// A fast approach's checkpoints of state `T` and where the next is due.
+pub(super) struct Checkpoints<T> {
+    pub(super) list: VecDeque<(f64, T)>,
+    pub(super) next: f64,
+}
+
+impl<T> Checkpoints<T> {
+    pub(super) fn new(start: f64) -> Self {
+        Self {
+            list: VecDeque::with_capacity(CHECKPOINTS),
+            next: start,
+        }
+    }
+
+    /// Keeps `state` taken at `l_k_bar`, dropping the oldest beyond `CHECKPOINTS`.
+    pub(super) fn keep(&mut self, way: Way, l_k_bar: f64, state: T) {
+        if self.list.len() == CHECKPOINTS {
+            self.list.pop_front();
+        }
+        self.list.push_back((l_k_bar, state));
+        self.next = way.on(l_k_bar, CHECKPOINT_SPACING);
+    }
+
+    /// The latest checkpoint at or before `l_k_bar` along the stage, else
+    /// the earliest kept; it and the later ones leave the list, the earlier
+    /// ones stay for a retry from further back.
+    pub(super) fn before(&mut self, way: Way, l_k_bar: f64) -> Option<(f64, T)> {
+        let at = (self.list.iter())
+            .rposition(|(l, _)| way.reached(l_k_bar, *l))
+            .unwrap_or(0);
+        self.list.drain(at..).next()
+    }
+}
+
+/// A new span of `phase` in program stage `stage` (`None`: relaxing),
+/// starting at `l_k_bar`.
+pub(super) fn span(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> PhaseSpan {
+    PhaseSpan {
+        phase,
+        stage,
+        from_l_k_bar: l_k_bar,
+        to_l_k_bar: l_k_bar,
+        steps: 0,
+        newton_iterations: 0,
+        contact_sweeps: 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Samples every 0.5 in l_k bar from 300 down, H bar from `h`.
+    fn series(h: impl Fn(f64) -> f64) -> Vec<Sample> {
+        (0..60)
+            .map(|i| 300.0 - 0.5 * f64::from(i))
+            .map(|l_k_bar| Sample {
+                l_k_bar,
+                h_bar: h(l_k_bar),
+                ..Sample::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_fall_of_h_bar_spread_over_many_samples_is_a_smeared_snap() {
+        // Steady at 0.2 down to 290, then falling linearly to 0.02 at 272.
+        let smeared = series(|l| if l > 290.0 { 0.2 } else { 0.2 - 0.01 * (290.0 - l) });
+        let (began, now) = smeared_snap(&smeared).expect("a smeared snap");
+        assert_eq!(now, 270.5);
+        assert!(
+            (began - 288.0).abs() < 0.01,
+            "the last sample within 0.9 of the peak: {began}"
+        );
+        // A sudden drop is left to the inversion detection.
+        assert_eq!(
+            smeared_snap(&series(|l| if l > 275.0 { 0.2 } else { 0.05 })),
+            None
+        );
+        // Steady tightening: 10 % over the window.
+        assert_eq!(smeared_snap(&series(|l| 0.2 - 0.001 * (300.0 - l))), None);
+    }
+
+    /// Checkpoints are found back along the stage, either way.
+    #[test]
+    fn checkpoints_are_found_back_along_either_way() {
+        for (way, marks) in [(Way(1.0), [300.0, 298.0, 296.0]), (Way(-1.0), [300.0, 302.0, 304.0])] {
+            let mut saved = Checkpoints::new(300.0);
+            for m in marks {
+                saved.keep(way, m, m);
+            }
+            assert_eq!(saved.next, way.on(marks[2], CHECKPOINT_SPACING));
+            // Back from just past the last mark: the second.
+            let (l, _) = saved.before(way, way.back(marks[2], 1.0)).unwrap();
+            assert_eq!(l, marks[1]);
+            assert_eq!(saved.list.len(), 1);
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! Events in a stage's own samples: an inversion while the knot tightens
+//! ([`measurements::detect_inversion`], paper Fig. 5), the loop flipping back
+//! while it loosens ([`measurements::detect_flip_back`]).
+use super::adaptive::Way;
+use super::report::{Event, EventKind};
+use crate::case::Direction;
+use crate::measurements::{self, InversionCriteria, Sample};
+
+/// The first event of the stage `stage` whose samples start at `first` in
+/// `series`, moving `way`; its sample index is the series'.
+pub(super) fn detect(
+    series: &[Sample],
+    first: usize,
+    way: Way,
+    criteria: &InversionCriteria,
+    stage: usize,
+) -> Option<Event> {
+    let own = &series[first..];
+    let (kind, direction, found) = if way.0 > 0.0 {
+        (EventKind::Inversion, Direction::Tighten, measurements::detect_inversion(own, criteria))
+    } else {
+        (EventKind::FlipBack, Direction::Loosen, measurements::detect_flip_back(own, criteria))
+    };
+    let mut at = found?;
+    at.sample += first;
+    let clean = match kind {
+        EventKind::Inversion => at.f_bar_after < at.f_bar_before,
+        EventKind::FlipBack => at.kinetic_energy_ratio >= criteria.kinetic_energy_spike,
+    };
+    Some(Event {
+        stage,
+        direction,
+        kind,
+        at,
+        clean,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Samples every 0.5 in l_k bar along `way` from 300, H bar from `h`,
+    /// the kinetic energy spiking where `spike` says.
+    fn series(way: f64, h: impl Fn(f64) -> f64, spike: impl Fn(f64) -> bool) -> Vec<Sample> {
+        (0..80)
+            .map(|i| 300.0 - way * 0.5 * f64::from(i))
+            .map(|l_k_bar| Sample {
+                l_k_bar,
+                h_bar: h(l_k_bar),
+                width: 1.0,
+                f_bar: 0.05,
+                kinetic_energy: if spike(l_k_bar) { 100.0 } else { 1.0 },
+                ..Sample::default()
+            })
+            .collect()
+    }
+
+    /// A loop lying low (H bar 0.1) that stands up to 0.3 at l_k bar 320
+    /// while the knot loosens flips back there; the tightening detector does
+    /// not take a rise for an inversion, nor the loosening one a fall.
+    #[test]
+    fn a_loop_standing_up_while_loosening_flips_back() {
+        let criteria = InversionCriteria::default();
+        let rising = series(-1.0, |l| if l < 320.0 { 0.1 } else { 0.3 }, |l| (320.0..322.0).contains(&l));
+        let event = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
+        assert_eq!((event.kind, event.direction, event.stage), (EventKind::FlipBack, Direction::Loosen, 2));
+        assert_eq!(event.at.l_k_bar, 319.5);
+        assert!(event.clean);
+        assert_eq!(detect(&rising, 0, Way(1.0), &criteria, 2), None);
+        let falling = series(-1.0, |l| if l < 320.0 { 0.3 } else { 0.1 }, |_| false);
+        assert_eq!(detect(&falling, 0, Way(-1.0), &criteria, 2), None);
+    }
+
+    /// A stage's event is found in its own samples, indexed in the series.
+    #[test]
+    fn events_are_found_in_the_stages_own_samples() {
+        let criteria = InversionCriteria::default();
+        let mut all = series(1.0, |l| if l > 280.0 { 0.3 } else { 0.05 }, |l| (279.0..281.0).contains(&l));
+        let first = all.len();
+        all.extend(series(-1.0, |l| if l < 320.0 { 0.1 } else { 0.3 }, |l| (320.0..322.0).contains(&l)));
+        let inversion = detect(&all, 0, Way(1.0), &criteria, 0).unwrap();
+        assert_eq!(inversion.kind, EventKind::Inversion);
+        let back = detect(&all, first, Way(-1.0), &criteria, 1).unwrap();
+        assert_eq!(back.at.sample, first + 38, "l_k bar 319.5 is the 39th sample of the release");
+    }
+}

@@ -1,0 +1,103 @@
+//! The snapshots a report keeps for viewers (the size budget: about 50 kB
+//! each at K = 301): one every `SNAPSHOT_SPACING` in l_k bar along a stage,
+//! and every `EVENT_SPACING` within `EVENT_WINDOW` either side of each
+//! stage's event, so that a viewer steps through the snap.
+use super::adaptive::Way;
+use super::report::EventKind;
+use super::runner::{Case, SNAPSHOT_HISTORY};
+use super::travel::Travel;
+use crate::snapshot::Snapshot;
+
+const SNAPSHOT_SPACING: f64 = 20.0;
+const EVENT_SPACING: f64 = 2.0;
+const EVENT_WINDOW: f64 = 10.0;
+
+/// Where a stage's next snapshots are due.
+#[derive(Clone, Debug)]
+pub(super) struct SnapshotPlan {
+    next: f64,
+    /// After the event: the next dense snapshot and where the dense ones stop.
+    after_event: Option<(f64, f64)>,
+}
+
+impl SnapshotPlan {
+    pub(super) fn new(way: Way, start: f64) -> Self {
+        Self {
+            next: way.on(start, SNAPSHOT_SPACING),
+            after_event: None,
+        }
+    }
+}
+
+impl Case<'_> {
+    /// Keeps the sample's snapshot in the history, detects the stage's event
+    /// and keeps the snapshots around it, and the stage's periodic ones.
+    pub(super) fn keep_snapshots(&mut self, travel: &mut Travel, l_k_bar: f64) {
+        let history = &mut self.carried.history;
+        if history.len() == SNAPSHOT_HISTORY {
+            history.pop_front();
+        }
+        history.push_back(Snapshot::capture(&self.world, "sample", l_k_bar, self.clock.elapsed));
+        let way = travel.way;
+        if travel.event.is_none() {
+            if let Some(event) = self.detect(travel) {
+                self.event_snapshots(travel, event.kind, event.at.l_k_bar);
+            }
+        } else if let Some((next, end)) = travel.snapshots.after_event {
+            if way.reached(l_k_bar, next) && !way.past(l_k_bar, end) {
+                let kind = travel.event.map_or(EventKind::Inversion, |e| e.kind);
+                let label = format!("after_{kind}");
+                self.report
+                    .snapshots
+                    .push(Snapshot::capture(&self.world, &label, l_k_bar, self.clock.elapsed));
+                travel.snapshots.after_event = Some((way.on(l_k_bar, EVENT_SPACING), end));
+            }
+        }
+        if way.reached(l_k_bar, travel.snapshots.next) {
+            let label = self.program[self.stage].name();
+            self.report
+                .snapshots
+                .push(Snapshot::capture(&self.world, label, l_k_bar, self.clock.elapsed));
+            travel.snapshots.next = way.on(l_k_bar, SNAPSHOT_SPACING);
+        }
+    }
+
+    /// The snapshots either side of the event at `at`, taken from the
+    /// history (the detection lags the event).
+    fn event_snapshots(&mut self, travel: &mut Travel, kind: EventKind, at: f64) {
+        let way = travel.way;
+        let mut stored: Vec<f64> = Vec::new();
+        let mut offset = EVENT_WINDOW;
+        while offset >= -EVENT_WINDOW {
+            let when = if offset == 0.0 {
+                "at"
+            } else if offset == EVENT_SPACING {
+                "before"
+            } else if offset > 0.0 {
+                "near"
+            } else {
+                "after"
+            };
+            let target = way.back(at, offset);
+            let distance = |f: &Snapshot| (f.l_k_bar - target).abs();
+            let nearest = (self.carried.history.iter())
+                .filter(|f| offset > 0.0 || way.reached(f.l_k_bar, at))
+                .min_by(|a, b| distance(a).total_cmp(&distance(b)));
+            if let Some(f) = nearest.filter(|f| distance(f) < EVENT_SPACING / 2.0) {
+                if !stored.contains(&f.l_k_bar) {
+                    stored.push(f.l_k_bar);
+                    self.report.snapshots.push(Snapshot {
+                        label: format!("{when}_{kind}"),
+                        ..f.clone()
+                    });
+                }
+            }
+            offset -= EVENT_SPACING;
+        }
+        let furthest = stored
+            .iter()
+            .copied()
+            .fold(at, |a, b| if way.past(b, a) { b } else { a });
+        travel.snapshots.after_event = Some((way.on(furthest, EVENT_SPACING), way.on(at, EVENT_WINDOW)));
+    }
+}

@@ -1,0 +1,290 @@
+//! A stage that moves the clamps along the pull: a pull (tightening), a
+//! release (loosening) or a soft stage (the grips moving, the clamps on
+//! springs). Samples every `sample_interval` in l_k bar; events are detected
+//! in the stage's own samples; the adaptive schedule ([`super::adaptive`])
+//! runs pulls and releases fast far from them.
+use super::adaptive::{
+    self, Checkpoints, END_REVIEW, FALSE_ALARM, MIN_LEAD, Phase, RESTART_BEFORE, SETTLE_TIME, SLOW_AFTER, Way,
+};
+use super::events;
+use super::report::Event;
+use super::runner::{Carried, Case, Ending, Observer};
+use super::snapshots::SnapshotPlan;
+use crate::case::{Direction, LoadStage};
+use crate::pipeline::World;
+use crate::rod::{End, Spring, node_dof};
+use crate::time_step::TimeStep;
+
+/// Where a stage stands between samples, kept in checkpoints.
+#[derive(Clone)]
+pub(super) struct Travel {
+    pub(super) way: Way,
+    /// The series index of the stage's first sample.
+    first_sample: usize,
+    next_sample: f64,
+    pub(super) snapshots: SnapshotPlan,
+    phase: Phase,
+    /// l_k bar where `phase` began.
+    phase_start: f64,
+    /// Where the fast approach saw the event that the snap phase is resolving.
+    fast_event: Option<f64>,
+    /// The stage's first event.
+    pub(super) event: Option<Event>,
+}
+
+/// The state a fast approach can return to.
+pub(super) struct Checkpoint {
+    world: World,
+    clock: TimeStep,
+    carried: Carried,
+    travel: Travel,
+    series: usize,
+    snapshots: usize,
+    events: usize,
+}
+
+impl Case<'_> {
+    /// Runs the current stage, a pull, release or soft stage, to its end.
+    pub(super) fn travel(&mut self, stage: LoadStage, observer: &mut Observer) -> Result<(), Ending> {
+        let soft = matches!(stage, LoadStage::Soft(_));
+        let way = Way(if stage.direction() == Direction::Loosen { -1.0 } else { 1.0 });
+        let target = match stage {
+            LoadStage::Release(t) => Some(t.to_l_k_bar.unwrap_or(self.program_start)),
+            _ => stage.target(),
+        };
+        let phase = if adaptive::pulls_fast(self.params) && !soft {
+            Phase::Approach
+        } else {
+            Phase::Reference
+        };
+        if let LoadStage::Soft(s) = stage {
+            self.mount_springs(s.stiffness_bar);
+        }
+        let start = self.l_k_bar();
+        let mut travel = Travel {
+            way,
+            first_sample: self.report.series.len(),
+            next_sample: start,
+            snapshots: SnapshotPlan::new(way, start),
+            phase,
+            phase_start: start,
+            fast_event: None,
+            event: None,
+        };
+        self.enter(&mut travel, phase, start);
+        let mut saved = Checkpoints::new(start);
+        let ending = loop {
+            let (step, dt) = self.step(travel.phase)?;
+            let l_k_bar = self.l_k_bar();
+            if !way.reached(l_k_bar, travel.next_sample) {
+                continue;
+            }
+            travel.next_sample = way.on(l_k_bar, self.params.sample_interval);
+            let points = self.sample(travel.phase, &step, dt, l_k_bar);
+            self.keep_snapshots(&mut travel, l_k_bar);
+            self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
+            let stop = self.stop_at(&travel, target);
+            let within = way.along(start, l_k_bar) / way.along(start, stop);
+            self.observe(observer, &points, l_k_bar, within)?;
+            if self.schedule(&mut travel, &mut saved, l_k_bar)? {
+                continue;
+            }
+            let sample = self.report.series.last().copied().unwrap_or_default();
+            let tight = way.0 > 0.0 && self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
+            if (way.reached(l_k_bar, stop) || tight) && !self.review_end(&mut travel, &mut saved, l_k_bar)? {
+                break Ok(());
+            }
+        };
+        if soft {
+            self.unmount_springs();
+        }
+        ending
+    }
+
+    /// Where the current stage stops: its target; a tightening without one
+    /// at the stopping rules (`min_l_k_bar`, or `stop_after_inversion` past
+    /// its inversion).
+    fn stop_at(&self, travel: &Travel, target: Option<f64>) -> f64 {
+        let floor = self.params.min_l_k_bar;
+        match (target, travel.event, self.params.stop_after_inversion) {
+            (Some(x), ..) if travel.way.0 < 0.0 => x,
+            (Some(x), ..) => x.max(floor),
+            (None, Some(e), Some(margin)) => (e.at.l_k_bar - margin).max(floor),
+            (None, ..) => floor,
+        }
+    }
+
+    /// The adaptive schedule's moves after a sample at `l_k_bar`: back to a
+    /// checkpoint when the fast approach sees an event (returns `true`),
+    /// checkpoints while fast, fast again past the event or after a false
+    /// alarm; otherwise the clamps' speed.
+    fn schedule(
+        &mut self,
+        travel: &mut Travel,
+        saved: &mut Checkpoints<Checkpoint>,
+        l_k_bar: f64,
+    ) -> Result<bool, Ending> {
+        let way = travel.way;
+        if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
+            if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.first_sample..]) {
+                if let Some(c) = saved.before(way, way.back(began, RESTART_BEFORE)) {
+                    self.restore(c, travel)?;
+                    travel.fast_event = Some(fell);
+                    return Ok(true);
+                }
+            }
+        }
+        match (travel.phase, travel.event) {
+            (Phase::Approach, Some(event)) => {
+                if let Some(c) = saved.before(way, way.back(event.at.l_k_bar, RESTART_BEFORE)) {
+                    self.restore(c, travel)?;
+                    travel.fast_event = Some(event.at.l_k_bar);
+                    return Ok(true);
+                }
+            }
+            (Phase::Approach, None) if way.reached(l_k_bar, saved.next) => {
+                let state = self.checkpoint(travel);
+                saved.keep(way, l_k_bar, state);
+            }
+            (Phase::Snap, Some(event))
+                if !way.reached(event.at.l_k_bar, way.on(travel.phase_start, MIN_LEAD)) && !saved.list.is_empty() =>
+            {
+                // The slow phase met its event right after its restart: the
+                // restart was already past the fold. Go back further.
+                if let Some(c) = saved.before(way, way.back(travel.phase_start, RESTART_BEFORE)) {
+                    let fast = travel.fast_event;
+                    self.restore(c, travel)?;
+                    travel.fast_event = fast;
+                    return Ok(true);
+                }
+            }
+            (Phase::Snap, Some(event)) if way.reached(l_k_bar, way.on(event.at.l_k_bar, SLOW_AFTER)) => {
+                self.enter(travel, Phase::After, l_k_bar);
+            }
+            (Phase::Snap, None) if travel.fast_event.is_some_and(|f| way.past(l_k_bar, way.on(f, FALSE_ALARM))) => {
+                // The fast pull's event was its own swinging: approach again.
+                self.enter(travel, Phase::Approach, l_k_bar);
+                saved.next = l_k_bar;
+            }
+            _ => self.drive(travel, l_k_bar),
+        }
+        Ok(false)
+    }
+
+    /// At the stop condition: a fast approach without an event redoes the
+    /// last `END_REVIEW` of the stage from a checkpoint (returns `true`).
+    fn review_end(
+        &mut self,
+        travel: &mut Travel,
+        saved: &mut Checkpoints<Checkpoint>,
+        l_k_bar: f64,
+    ) -> Result<bool, Ending> {
+        if travel.phase != Phase::Approach {
+            return Ok(false);
+        }
+        match saved.before(travel.way, travel.way.back(l_k_bar, END_REVIEW)) {
+            Some(c) => self.restore(c, travel).map(|()| true),
+            None => Ok(false),
+        }
+    }
+
+    /// The state to come back to.
+    fn checkpoint(&self, travel: &Travel) -> Checkpoint {
+        Checkpoint {
+            world: self.world.clone(),
+            clock: self.clock.clone(),
+            carried: self.carried.clone(),
+            travel: travel.clone(),
+            series: self.report.series.len(),
+            snapshots: self.report.snapshots.len(),
+            events: self.report.events.len(),
+        }
+    }
+
+    /// Enters `phase` at `l_k_bar` with the clamps at its speed.
+    fn enter(&mut self, travel: &mut Travel, phase: Phase, l_k_bar: f64) {
+        self.enter_phase(phase);
+        travel.phase = phase;
+        travel.phase_start = l_k_bar;
+        self.drive(travel, l_k_bar);
+    }
+
+    /// Both clamps (or, on springs, both grips) moving along the stage at the
+    /// phase's speed at `l_k_bar`.
+    fn drive(&mut self, travel: &Travel, l_k_bar: f64) {
+        let pulled = travel.way.along(travel.phase_start, l_k_bar);
+        let speed = travel.phase.speed(pulled) * self.params.clamp_speed() * travel.way.0;
+        let rod = &mut self.world.rods[0];
+        if let [start, finish] = &mut rod.springs[..] {
+            start.velocity = -speed;
+            finish.velocity = speed;
+            return;
+        }
+        let v = self.axis * speed;
+        rod.move_clamp(End::Start, -v);
+        rod.move_clamp(End::Finish, v);
+    }
+
+    /// Back to checkpoint `c` of a fast approach, to move slowly through the
+    /// event: the series, snapshots and events after it are dropped, and the
+    /// knot settles with the clamps held (the fast pull leaves it swinging)
+    /// before the snap phase starts.
+    fn restore(&mut self, (at, c): (f64, Checkpoint), travel: &mut Travel) -> Result<(), Ending> {
+        self.world = c.world;
+        self.clock = c.clock;
+        self.carried = c.carried;
+        *travel = c.travel;
+        self.report.series.truncate(c.series);
+        self.sample_phases.truncate(c.series);
+        self.report.snapshots.truncate(c.snapshots);
+        self.report.events.truncate(c.events);
+        self.enter(travel, Phase::Settle, at);
+        self.settle(SETTLE_TIME * self.scales.time_unit)?;
+        self.enter(travel, Phase::Snap, at);
+        Ok(())
+    }
+
+    /// Detects the current stage's first event in its own samples.
+    pub(super) fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
+        if travel.event.is_some() {
+            return None;
+        }
+        let criteria = self.criteria();
+        let found = events::detect(&self.report.series, travel.first_sample, travel.way, &criteria, self.stage);
+        travel.event = found;
+        if let Some(event) = found {
+            self.record(event);
+        }
+        found
+    }
+
+    /// Frees the clamps along the pull (the axis is x, checked at submit
+    /// time) and ties each to a grip by a spring of stiffness `stiffness_bar`
+    /// EI / h^3.
+    fn mount_springs(&mut self, stiffness_bar: f64) {
+        let stiffness = stiffness_bar * self.params.bending_stiffness() / self.params.h.powi(3);
+        let rod = &mut self.world.rods[0];
+        let k = rod.nodes();
+        for i in [0, 1, k - 2, k - 1] {
+            rod.fixed[node_dof(i)] = false;
+        }
+        rod.springs = [0, k - 1]
+            .map(|i| Spring {
+                dof: node_dof(i),
+                stiffness,
+                anchor: rod.q[node_dof(i)],
+                velocity: 0.0,
+            })
+            .to_vec();
+        self.world.forget_factorizations();
+    }
+
+    /// The clamps held where the springs left them.
+    fn unmount_springs(&mut self) {
+        let rod = &mut self.world.rods[0];
+        rod.springs.clear();
+        rod.clamp(End::Start);
+        rod.clamp(End::Finish);
+        self.world.forget_factorizations();
+    }
+}

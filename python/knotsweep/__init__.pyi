@@ -41,11 +41,11 @@ class Record(dict[str, Any]):
 class Inversion(Record):
     """The inversion point (eq. 11's quantities)."""
     l_k_bar: float
-    l_c_over_l: float
+    l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
-    h_bar_before: float
-    h_bar_after: float
+    H_bar_before: float
+    H_bar_after: float
     kinetic_energy_ratio: float
     sample: int
 
@@ -71,8 +71,8 @@ class Stage(Record):
     newton_iterations: int
     contact_sweeps: int
 
-class Frame(Record):
-    """A centreline snapshot; points: (K, 3) array (m)."""
+class Snapshot(Record):
+    """A state of the knot kept for viewers; points: (K, 3) array (m)."""
     label: str
     l_k_bar: float
     points: np.ndarray
@@ -81,7 +81,7 @@ class Frame(Record):
 class Progress(NamedTuple):
     fraction: float
     l_k_bar: float
-    h_bar: float
+    H_bar: float
     steps: int
 
 class Result:
@@ -93,7 +93,7 @@ class Result:
     inversion: Inversion | None
     series: dict[str, np.ndarray]
     """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
-    frames: list[Frame]
+    snapshots: list[Snapshot]
     stats: Stats
     stages: list[Stage]
     writhe: float
@@ -155,33 +155,29 @@ def run(
         Default: "isotropic".
     rolling: Friction acts at the rods' surfaces: a contact's slip includes each rod's spin about its axis and
         friction torques the twist, so rods roll on each other (a rod on an inclined rod rolls at (2/3) g sin
-        alpha). false: friction at the centre lines, as in the paper's method and code; with the paper's start
-        twist it reproduces Fig. 1 (n = 3 inverts at l_k bar 136.4, n = 4 at 213.5; the paper's code 148 +- 2
-        and 215 +- 2; the experiments' brackets hold both), Fig. 7 (h invariance), Fig. 9 (growth with n) and
-        Fig. 11 (l_k bar grows with mu at h = 3.4 mm, with a clean snap at every mu 0.1-0.7). true: n = 3
-        inverts at 124.9, n = 4 at 193.0 with the start twist, and at h = 3.4 mm F bar no longer falls through
-        the events at mu = 0.4 and 0.7 (docs/FIDELITY.md). Range: true or false. Default: false. Paper: false.
+        alpha). false: friction at the centre lines, as in the paper's method and code, the model that
+        reproduces the paper's Figs 1, 7, 9 and 11 together with its start twist. The inversions of both are
+        in docs/VALIDATION.md ("Sensitivity"), set beside the paper's in docs/FIDELITY.md. Range: true or
+        false. Default: false. Paper: false.
     contact_solve: How each step's contact forces see the rods' response: "explicit" (the paper's method: free
         velocities v + dt M^-1 F and the mass-only Delassus operator, the forces then held fixed in the
         implicit step) or "implicit" (the free velocities of a contact-free implicit step and the Delassus
         operator of its Newton matrix, so a sticking contact holds for the motion the step takes, without
-        creep; a banded solve per contact axis each step: about 45 times the cost per step, 5.9 ms against
-        0.13 ms at n = 3, K = 301, BENCHMARKS.md). Range: "explicit" or "implicit". Default: "explicit".
-        Paper: "explicit".
+        creep; a banded solve per contact axis and a dense contact solve each step, many times the explicit
+        solve's cost: BENCHMARKS.md). Range: "explicit" or "implicit". Default: "explicit". Paper: "explicit".
     contact_candidates: Which segment pairs get a contact force each step: "detected" (every pair within reach
         at the start of the step, one of two pairs meeting at a shared node) or "predicted" (as the paper's
         code: only the pairs that a contact-free implicit predictor step brings closer than 2h, so a touching
-        pair that the predictor pulls apart gets no force in that step; a second Newton solve per step).
-        "predicted" with dt 1 ms fixed (adaptive_dt false) and the reference protocol tracks the paper's
-        code's n = 4 curve (inversion at l_k bar 213.7 against 215 +- 2, F bar within 4 %); n = 3 inverts at
-        131.8 against 148. Range: "detected" or "predicted". Default: "detected". Paper: "predicted" (the
+        pair that the predictor pulls apart gets no force in that step; a second Newton solve per step). With
+        dt 1 ms fixed (adaptive_dt false) and the reference protocol, "predicted" is the paper's code's
+        scheme: its inversions are in docs/VALIDATION.md ("Sensitivity"), beside the paper's code's in
+        docs/FIDELITY.md. Range: "detected" or "predicted". Default: "detected". Paper: "predicted" (the
         code).
-    start_twist (turns): Twist the knot starts with between its clamps, spread evenly along the rod. The
-        paper's code's is about +1.0 to +1.3 turns for the builder's knots n = 1..5 (writhe -3.0 to -11.3); 0:
-        none, as if the knot's ends had turned freely while it was tied (n = 3 then inverts at l_k bar 150.4,
-        n = 4 at 245.5). The report gives the twist used and the knot's writhe. Range: null or [-20, 20]
-        turns. null: the paper's code's, which gives the rod the linking number 2n with the pull axis (sign of
-        the knot's writhe). Default: null. Paper: null (the code).
+    start_twist (turns): Twist the knot starts with between its clamps, spread evenly along the rod; 0: none,
+        as if the knot's ends had turned freely while it was tied. The report gives the twist used and the
+        knot's writhe; docs/VALIDATION.md ("Sensitivity") the inversions with and without it. Range: null or
+        [-20, 20] turns. null: the paper's code's, which gives the rod the linking number 2n with the pull
+        axis (sign of the knot's writhe). Default: null. Paper: null (the code).
     gravity (m/s^2): Gravitational acceleration, a vector; the pull is along x. Range: three numbers, each in
         [-1e3, 1e3] m/s^2. Default: [0.0, 0.0, 0.0]. Paper: [0, 0, 0].
     length (m): Rod length L. Range: [0.05, 100] m. Default: 1.0. Paper: 1 m.
@@ -193,15 +189,12 @@ def run(
     pull_speed (m/s): Pulling speed of each clamp. Range: [1e-5, 1] m/s. Default: 3e-3. Paper: 1 mm/s (the
         text), 3 mm/s (the code).
     protocol: How the clamps move: "reference" pulls at pull_speed throughout, as in the paper. "adaptive"
-        ramps up to 16 times pull_speed while the knot is far from its snap (damped, sparing the sliding along
-        the rod; with adaptive_dt, steps up to 4 times dt), keeping a checkpoint every 2 in l_k bar; once a
-        snap is detected it goes back to the checkpoint 8 before it (further if the knot then snaps within 2;
-        also when H bar falls to 0.4 within 20, a snap the approach smeared out), lets the knot settle and
-        pulls through the snap at pull_speed; above mu = 0.7 (not measured) it pulls as "reference" does. Its
-        inversion lies within 0.6 % of the reference's at every preset case at about a tenth of the cost; its
-        fast approach reads F bar about 5 % above the reference's (BENCHMARKS.md, "Physics revision 7"):
-        choose "reference" for force curves. Range: "reference" or "adaptive". Default: "adaptive". Paper:
-        "reference".
+        pulls fast while the knot is far from its snap (damped, sparing the sliding along the rod, keeping
+        checkpoints); once it sees a snap it goes back to a checkpoint before it, lets the knot settle and
+        pulls through the snap at pull_speed (solver::protocol holds its constants; at the largest frictions
+        it pulls as "reference" does). Its inversions match the reference's at a fraction of the cost, but its
+        fast approach reads F bar high (BENCHMARKS.md, "Pull protocols"): choose "reference" for force curves.
+        Range: "reference" or "adaptive". Default: "adaptive". Paper: "reference".
     dt (s): Time step; with adaptive_dt the largest step. Range: null or [1e-6, 1e-2] s. null: 0.5 ms (half
         the paper's code's 1 ms, converged within 0.4 %) at L = 1 m, K = 301, scaled with the square of the
         edge length L/(K-1), at most 1e-2 s. Default: null. Paper: 1 ms (the code).
@@ -320,5 +313,6 @@ class Client:
     def presets(self) -> list[dict[str, Any]]: ...
     def case(self, case_id: int) -> dict[str, Any]: ...
     def series(self, case_id: int, raw: bool = False) -> Any: ...
-    def frames(self, case_id: int) -> list[dict[str, Any]]: ...
+    def snapshots(self, case_id: int) -> list[dict[str, Any]]: ...
+    def limits(self) -> dict[str, Any]: ...
     def health(self) -> dict[str, Any]: ...

@@ -112,10 +112,9 @@ fn numbers(values: &[f64]) -> Vec<Value> {
 }
 
 /// The presets: the paper's Figs 7, 9 and 11, under the default (adaptive)
-/// pull: within 0.6 % of the reference pull at every one of their cases at
-/// about a tenth of its cost (BENCHMARKS.md, "Physics revision 7"); a case's
-/// F bar series away from the snap is then the fast approach's (about 5 %
-/// high).
+/// pull, whose inversions match the reference pull's at a fraction of its
+/// cost (BENCHMARKS.md, "Pull protocols"); a case's F bar series away from
+/// the snap is then the fast approach's, which reads high.
 pub fn presets() -> Vec<Preset> {
     let grid = |name: &str, description: &str, base: Value, axes: Vec<(&str, Vec<Value>)>| {
         let base = base.as_object().cloned().expect("a preset's base is an object");

@@ -383,7 +383,12 @@ fn summarise(report: &CaseReport) {
             let stage = span.stage.map_or(String::new(), |i| format!("stage {} ", i + 1));
             format!(
                 "{stage}{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps)",
-                span.phase, span.from_l_k_bar, span.to_l_k_bar, span.steps, span.newton_iterations, span.contact_sweeps
+                span.phase,
+                span.from_l_k_bar,
+                span.to_l_k_bar,
+                span.steps,
+                span.newton_iterations,
+                span.contact_sweeps
             )
         })
         .collect();

@@ -169,7 +169,13 @@ pub fn presets() -> Vec<Preset> {
             serde_json::json!({"h": 1.6e-3, "mu": 0.1, "loading": [{"pull": {}}, {"release": {}}]}),
             vec![
                 ("n", (2..=5).map(Value::from).collect()),
-                ("gravity", vec![serde_json::json!([0.0, 0.0, 0.0]), serde_json::json!([0.0, 0.0, -9.81])]),
+                (
+                    "gravity",
+                    vec![
+                        serde_json::json!([0.0, 0.0, 0.0]),
+                        serde_json::json!([0.0, 0.0, -9.81]),
+                    ],
+                ),
             ],
         ),
         make(
@@ -186,7 +192,10 @@ pub fn presets() -> Vec<Preset> {
              in rubber, silicone, nylon, nitinol and steel (nu changes the twisting stiffness GJ/EI = 1/(1 + nu))",
             serde_json::json!({"n": 3, "h": 1.6e-3, "length": 1.0, "mu": 0.1}),
             MATERIAL_AXIS,
-            solver::case::MATERIALS.iter().map(|m| Value::from(m.name)).collect(),
+            solver::case::MATERIALS
+                .iter()
+                .map(|m| Value::from(m.name))
+                .collect(),
         ),
     ]
 }

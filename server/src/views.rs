@@ -215,6 +215,19 @@ pub struct PhasePoint {
     /// In a certified sweep, the inversion's numerical uncertainty from the
     /// refined twin; null otherwise.
     pub uncertainty: Option<UncertaintyView>,
+    /// Where the program loosens after the inversion: the loop's flip back
+    /// and the hysteresis width; null otherwise.
+    #[schema(value_type = Option<Object>)]
+    pub hysteresis: Option<Value>,
+    /// Every event of the case's program (stage, direction, kind, l_k bar,
+    /// F bar and H bar around it, clean).
+    #[schema(value_type = Vec<Object>)]
+    pub events: Vec<Value>,
+    /// Whether the loading stayed quasi-static (kinetic over elastic energy
+    /// against its limit); null before the result, or for results stored
+    /// before it was measured.
+    #[schema(value_type = Option<Object>)]
+    pub quasi_static: Option<Value>,
 }
 
 /// The phase diagram of a sweep: for each case its varied parameters, status
@@ -485,7 +498,7 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
             position: s.position,
             params: varied
                 .iter()
-                .map(|name| (name.clone(), params.get(name).cloned().unwrap_or(Value::Null)))
+                .map(|name| (name.clone(), varied_value(name, &c.params, &params)))
                 .collect(),
             status: c.status().to_string(),
             cached: s.cached,
@@ -506,6 +519,19 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
             twin_of: None,
         }
     }
+}
+
+/// A case's value of the grid axis `name`: its parameter, or for the
+/// material axis the named material whose constants it has.
+fn varied_value(name: &str, params: &solver::case::CaseParams, json: &Value) -> Value {
+    if name == crate::spec::MATERIAL_AXIS {
+        let found = solver::case::MATERIALS.iter().find(|m| {
+            (m.youngs_modulus, m.density, m.poisson_ratio)
+                == (params.youngs_modulus, params.density, params.poisson_ratio)
+        });
+        return found.map_or(Value::Null, |m| Value::from(m.name));
+    }
+    json.get(name).cloned().unwrap_or(Value::Null)
 }
 
 /// A sweep's point (one of its first [`crate::spec::points`] cases) and, in a
@@ -778,11 +804,22 @@ impl PhaseDiagram {
                         uncertainty: point
                             .twin
                             .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
+                        hysteresis: summary_field(point.case, "hysteresis"),
+                        events: summary_field(point.case, "events")
+                            .and_then(|v| v.as_array().cloned())
+                            .unwrap_or_default(),
+                        quasi_static: summary_field(point.case, "quasi_static"),
                     }
                 })
                 .collect(),
         })
     }
+}
+
+/// A non-null field of a case's stored result summary.
+fn summary_field(case: &SweepCase, name: &str) -> Option<Value> {
+    let summary = &case.case.result.as_ref()?.summary;
+    summary.get(name).filter(|v| !v.is_null()).cloned()
 }
 
 /// Status words of cases, in the order metrics list them: the queue states

@@ -83,9 +83,7 @@ fn the_phases_count_every_step_once() {
     let report = protocol::run(&params, &mut |_| true);
     assert_eq!(report.status, Status::Completed, "{}", report.reason);
     let (settling, pulling): (Vec<_>, Vec<_>) = report.phases.iter().partition(|s| s.phase == Phase::Settle);
-    let sum = |spans: &[&PhaseSpan], f: fn(&PhaseSpan) -> u64| {
-        spans.iter().map(|s| f(s)).sum::<u64>()
-    };
+    let sum = |spans: &[&PhaseSpan], f: fn(&PhaseSpan) -> u64| spans.iter().map(|s| f(s)).sum::<u64>();
     assert!(!pulling.is_empty(), "{:?}", report.phases);
     assert_eq!(sum(&pulling, |s| s.steps), report.stats.steps);
     assert_eq!(

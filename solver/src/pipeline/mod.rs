@@ -313,7 +313,9 @@ impl World {
     /// Makes every stepper assemble a new Newton matrix at its next step:
     /// after a rod's constraints or springs change.
     pub fn forget_factorizations(&mut self) {
-        self.bodies.iter_mut().for_each(|b| b.stepper.forget_factorization());
+        self.bodies
+            .iter_mut()
+            .for_each(|b| b.stepper.forget_factorization());
     }
 
     /// The largest rod radius (the scale of contact tolerances).

@@ -303,7 +303,10 @@ mod tests {
     /// Checkpoints are found back along the stage, either way.
     #[test]
     fn checkpoints_are_found_back_along_either_way() {
-        for (way, marks) in [(Way(1.0), [300.0, 298.0, 296.0]), (Way(-1.0), [300.0, 302.0, 304.0])] {
+        for (way, marks) in [
+            (Way(1.0), [300.0, 298.0, 296.0]),
+            (Way(-1.0), [300.0, 302.0, 304.0]),
+        ] {
             let mut saved = Checkpoints::new(300.0);
             for m in marks {
                 saved.keep(way, m, m);

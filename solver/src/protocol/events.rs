@@ -17,9 +17,17 @@ pub(super) fn detect(
 ) -> Option<Event> {
     let own = &series[first..];
     let (kind, direction, found) = if way.0 > 0.0 {
-        (EventKind::Inversion, Direction::Tighten, measurements::detect_inversion(own, criteria))
+        (
+            EventKind::Inversion,
+            Direction::Tighten,
+            measurements::detect_inversion(own, criteria),
+        )
     } else {
-        (EventKind::FlipBack, Direction::Loosen, measurements::detect_flip_back(own, criteria))
+        (
+            EventKind::FlipBack,
+            Direction::Loosen,
+            measurements::detect_flip_back(own, criteria),
+        )
     };
     let mut at = found?;
     at.sample += first;
@@ -62,9 +70,16 @@ mod tests {
     #[test]
     fn a_loop_standing_up_while_loosening_flips_back() {
         let criteria = InversionCriteria::default();
-        let rising = series(-1.0, |l| if l < 320.0 { 0.1 } else { 0.3 }, |l| (320.0..322.0).contains(&l));
+        let rising = series(
+            -1.0,
+            |l| if l < 320.0 { 0.1 } else { 0.3 },
+            |l| (320.0..322.0).contains(&l),
+        );
         let event = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
-        assert_eq!((event.kind, event.direction, event.stage), (EventKind::FlipBack, Direction::Loosen, 2));
+        assert_eq!(
+            (event.kind, event.direction, event.stage),
+            (EventKind::FlipBack, Direction::Loosen, 2)
+        );
         assert_eq!(event.at.l_k_bar, 319.5);
         assert!(event.clean);
         assert_eq!(detect(&rising, 0, Way(1.0), &criteria, 2), None);
@@ -76,12 +91,24 @@ mod tests {
     #[test]
     fn events_are_found_in_the_stages_own_samples() {
         let criteria = InversionCriteria::default();
-        let mut all = series(1.0, |l| if l > 280.0 { 0.3 } else { 0.05 }, |l| (279.0..281.0).contains(&l));
+        let mut all = series(
+            1.0,
+            |l| if l > 280.0 { 0.3 } else { 0.05 },
+            |l| (279.0..281.0).contains(&l),
+        );
         let first = all.len();
-        all.extend(series(-1.0, |l| if l < 320.0 { 0.1 } else { 0.3 }, |l| (320.0..322.0).contains(&l)));
+        all.extend(series(
+            -1.0,
+            |l| if l < 320.0 { 0.1 } else { 0.3 },
+            |l| (320.0..322.0).contains(&l),
+        ));
         let inversion = detect(&all, 0, Way(1.0), &criteria, 0).unwrap();
         assert_eq!(inversion.kind, EventKind::Inversion);
         let back = detect(&all, first, Way(-1.0), &criteria, 1).unwrap();
-        assert_eq!(back.at.sample, first + 38, "l_k bar 319.5 is the 39th sample of the release");
+        assert_eq!(
+            back.at.sample,
+            first + 38,
+            "l_k bar 319.5 is the 39th sample of the release"
+        );
     }
 }

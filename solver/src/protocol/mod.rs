@@ -22,8 +22,8 @@ mod twist;
 pub use crate::snapshot::{Snapshot, SnapshotContact};
 pub use adaptive::{ADAPTIVE_MAX_MU, ADAPTIVE_MAX_RATE, Phase, pulls_fast};
 pub use report::{
-    CaseReport, Event, EventKind, Hysteresis, PhaseSpan, Progress, QUASI_STATIC_LIMIT, QuasiStatic, Scaling, Stats,
-    Status,
+    CaseReport, Event, EventKind, Hysteresis, PhaseSpan, Progress, QUASI_STATIC_LIMIT, QuasiStatic, Scaling,
+    Stats, Status,
 };
 
 use crate::case::{CaseParams, ParamError, ValidCase};
@@ -36,7 +36,11 @@ use nalgebra::Vector3;
 /// start last and leave the other workers idle.
 pub fn work_estimate(params: &CaseParams) -> f64 {
     let steps = params.length / (params.clamp_speed() * params.time_step());
-    let fast = if pulls_fast(params) { adaptive::FAST_FACTOR } else { 1.0 };
+    let fast = if pulls_fast(params) {
+        adaptive::FAST_FACTOR
+    } else {
+        1.0
+    };
     let stages = params.loading.as_ref().map_or(1, Vec::len) as f64;
     steps * params.node_count() as f64 * stages / fast
 }

@@ -265,7 +265,13 @@ impl QuasiStatic {
     /// `None` without samples taken at `pull_speed`.
     pub(super) fn of(report: &CaseReport, phases: &[Phase]) -> Option<Self> {
         let energy_unit = report.params.bending_stiffness() / report.params.h;
-        let first_event = |stage: usize| report.events.iter().find(|e| e.stage == stage).map(|e| e.at.sample);
+        let first_event = |stage: usize| {
+            report
+                .events
+                .iter()
+                .find(|e| e.stage == stage)
+                .map(|e| e.at.sample)
+        };
         let mut ratios: Vec<f64> = (report.series.iter().enumerate().zip(phases))
             .filter(|((i, s), phase)| {
                 matches!(phase, Phase::Reference | Phase::Snap)

@@ -227,7 +227,11 @@ impl<'a> Case<'a> {
 
     /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h
     /// (`during` says when; called only then).
-    pub(super) fn penetration(&self, max_penetration: f64, during: impl FnOnce() -> String) -> Result<(), Ending> {
+    pub(super) fn penetration(
+        &self,
+        max_penetration: f64,
+        during: impl FnOnce() -> String,
+    ) -> Result<(), Ending> {
         if max_penetration > MAX_PENETRATION * self.params.h {
             return Err(Ending::new(
                 Status::Penetrated,
@@ -243,7 +247,11 @@ impl<'a> Case<'a> {
 
     /// An `Ending` when the knot type of `points` is not the case's (`when`
     /// says where; called only then).
-    pub(super) fn topology(&mut self, points: &[Vector3<f64>], when: impl FnOnce() -> String) -> Result<(), Ending> {
+    pub(super) fn topology(
+        &mut self,
+        points: &[Vector3<f64>],
+        when: impl FnOnce() -> String,
+    ) -> Result<(), Ending> {
         let det = knot::knot_determinant(points).ok();
         self.determinant(det, when)
     }
@@ -392,7 +400,13 @@ impl<'a> Case<'a> {
 
     /// One sample of eq. (11), the braid's shape, the energies and the
     /// linking number, taken in `phase`. Returns the rod's node positions.
-    pub(super) fn sample(&mut self, phase: Phase, step: &WorldStepReport, dt: f64, l_k_bar: f64) -> Vec<Vector3<f64>> {
+    pub(super) fn sample(
+        &mut self,
+        phase: Phase,
+        step: &WorldStepReport,
+        dt: f64,
+        l_k_bar: f64,
+    ) -> Vec<Vector3<f64>> {
         let params = self.params;
         let rod = &self.world.rods[0];
         let c = &mut self.carried;

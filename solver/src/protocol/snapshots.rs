@@ -37,7 +37,12 @@ impl Case<'_> {
         if history.len() == SNAPSHOT_HISTORY {
             history.pop_front();
         }
-        history.push_back(Snapshot::capture(&self.world, "sample", l_k_bar, self.clock.elapsed));
+        history.push_back(Snapshot::capture(
+            &self.world,
+            "sample",
+            l_k_bar,
+            self.clock.elapsed,
+        ));
         let way = travel.way;
         if travel.event.is_none() {
             if let Some(event) = self.detect(travel) {
@@ -47,9 +52,12 @@ impl Case<'_> {
             if way.reached(l_k_bar, next) && !way.past(l_k_bar, end) {
                 let kind = travel.event.map_or(EventKind::Inversion, |e| e.kind);
                 let label = format!("after_{kind}");
-                self.report
-                    .snapshots
-                    .push(Snapshot::capture(&self.world, &label, l_k_bar, self.clock.elapsed));
+                self.report.snapshots.push(Snapshot::capture(
+                    &self.world,
+                    &label,
+                    l_k_bar,
+                    self.clock.elapsed,
+                ));
                 travel.snapshots.after_event = Some((way.on(l_k_bar, EVENT_SPACING), end));
             }
         }

@@ -35,7 +35,9 @@ impl Case<'_> {
         let targets = [0, 1].map(|i| rod.q[dofs[i]] + shares[i] * TAU * rotate.turns);
         let duration = rotate.turns.abs() * TURN_TIME * self.scales.time_unit;
         let rate = TAU * rotate.turns.abs() / duration;
-        let reached = |rod: &Rod| (0..2).all(|i| (targets[i] - rod.q[dofs[i]]).abs() <= 1e-12 * TAU * rotate.turns.abs());
+        let reached = |rod: &Rod| {
+            (0..2).all(|i| (targets[i] - rod.q[dofs[i]]).abs() <= 1e-12 * TAU * rotate.turns.abs())
+        };
         let result = self.still(Phase::Rotate, duration, observer, &reached, |rod, dt| {
             for (dof, target) in dofs.into_iter().zip(targets) {
                 let left = target - rod.q[dof];

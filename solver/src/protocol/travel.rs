@@ -47,7 +47,11 @@ impl Case<'_> {
     /// Runs the current stage, a pull, release or soft stage, to its end.
     pub(super) fn travel(&mut self, stage: LoadStage, observer: &mut Observer) -> Result<(), Ending> {
         let soft = matches!(stage, LoadStage::Soft(_));
-        let way = Way(if stage.direction() == Direction::Loosen { -1.0 } else { 1.0 });
+        let way = Way(if stage.direction() == Direction::Loosen {
+            -1.0
+        } else {
+            1.0
+        });
         let target = match stage {
             LoadStage::Release(t) => Some(t.to_l_k_bar.unwrap_or(self.program_start)),
             _ => stage.target(),
@@ -147,7 +151,8 @@ impl Case<'_> {
                 saved.keep(way, l_k_bar, state);
             }
             (Phase::Snap, Some(event))
-                if !way.reached(event.at.l_k_bar, way.on(travel.phase_start, MIN_LEAD)) && !saved.list.is_empty() =>
+                if !way.reached(event.at.l_k_bar, way.on(travel.phase_start, MIN_LEAD))
+                    && !saved.list.is_empty() =>
             {
                 // The slow phase met its event right after its restart: the
                 // restart was already past the fold. Go back further.
@@ -161,7 +166,11 @@ impl Case<'_> {
             (Phase::Snap, Some(event)) if way.reached(l_k_bar, way.on(event.at.l_k_bar, SLOW_AFTER)) => {
                 self.enter(travel, Phase::After, l_k_bar);
             }
-            (Phase::Snap, None) if travel.fast_event.is_some_and(|f| way.past(l_k_bar, way.on(f, FALSE_ALARM))) => {
+            (Phase::Snap, None)
+                if travel
+                    .fast_event
+                    .is_some_and(|f| way.past(l_k_bar, way.on(f, FALSE_ALARM))) =>
+            {
                 // The fast pull's event was its own swinging: approach again.
                 self.enter(travel, Phase::Approach, l_k_bar);
                 saved.next = l_k_bar;
@@ -250,7 +259,13 @@ impl Case<'_> {
             return None;
         }
         let criteria = self.criteria();
-        let found = events::detect(&self.report.series, travel.first_sample, travel.way, &criteria, self.stage);
+        let found = events::detect(
+            &self.report.series,
+            travel.first_sample,
+            travel.way,
+            &criteria,
+            self.stage,
+        );
         travel.event = found;
         if let Some(event) = found {
             self.record(event);

@@ -149,6 +149,10 @@ impl StoredResult {
             "determinant_initial": report.determinant_initial,
             "determinant_final": report.determinant_final,
             "stats": report.stats,
+            "events": report.events,
+            "hysteresis": report.hysteresis,
+            "quasi_static": report.quasi_static,
+            "scaling": report.scaling,
         });
         let wall = report.stats.wall_time;
         let message = match (&report.inversion, report.reason.is_empty()) {

@@ -42,6 +42,11 @@ pub(super) const CHECKPOINT_SPACING: f64 = 2.0;
 /// n = 5's by -0.91 %, 8 before n = 3's by -0.17 % (CHANGELOG.md, physics
 /// revision 7).
 pub(super) const RESTART_BEFORE: f64 = 8.0;
+/// How far (l_k bar) before the fast release's flip back the slow release
+/// restarts: the fast release sees it later than the fast pull its snap (n = 4
+/// flips back at 226.5 under the reference release, where the fast one saw it
+/// about 16 later).
+pub(super) const RELEASE_RESTART_BEFORE: f64 = 24.0;
 /// A slow pull that snaps within this much l_k bar of its restart started
 /// past the fold, and is retried from further back.
 pub(super) const MIN_LEAD: f64 = 2.0;
@@ -189,6 +194,15 @@ impl Way {
     /// `d` in l_k bar on from `l`.
     pub(super) fn on(self, l: f64, d: f64) -> f64 {
         if self.0 > 0.0 { l - d } else { l + d }
+    }
+
+    /// How far before an event the slow phase restarts.
+    pub(super) fn restart_before(self) -> f64 {
+        if self.0 > 0.0 {
+            RESTART_BEFORE
+        } else {
+            RELEASE_RESTART_BEFORE
+        }
     }
 
     /// How far along the stage `l` lies from `start`.

@@ -4,7 +4,7 @@
 //! in the stage's own samples; the adaptive schedule ([`super::adaptive`])
 //! runs pulls and releases fast far from them.
 use super::adaptive::{
-    self, Checkpoints, END_REVIEW, FALSE_ALARM, MIN_LEAD, Phase, RESTART_BEFORE, SETTLE_TIME, SLOW_AFTER, Way,
+    self, Checkpoints, END_REVIEW, FALSE_ALARM, MIN_LEAD, Phase, SETTLE_TIME, SLOW_AFTER, Way,
 };
 use super::events;
 use super::report::Event;
@@ -30,6 +30,8 @@ pub(super) struct Travel {
     fast_event: Option<f64>,
     /// The stage's first event.
     pub(super) event: Option<Event>,
+    /// The stage's end has been redone slowly (`review_end`).
+    reviewed: bool,
 }
 
 /// The state a fast approach can return to.
@@ -74,6 +76,7 @@ impl Case<'_> {
             phase_start: start,
             fast_event: None,
             event: None,
+            reviewed: false,
         };
         self.enter(&mut travel, phase, start);
         let mut saved = Checkpoints::new(start);
@@ -131,7 +134,7 @@ impl Case<'_> {
         let way = travel.way;
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.first_sample..]) {
-                if let Some(c) = saved.before(way, way.back(began, RESTART_BEFORE)) {
+                if let Some(c) = saved.before(way, way.back(began, way.restart_before())) {
                     self.restore(c, travel)?;
                     travel.fast_event = Some(fell);
                     return Ok(true);
@@ -140,7 +143,7 @@ impl Case<'_> {
         }
         match (travel.phase, travel.event) {
             (Phase::Approach, Some(event)) => {
-                if let Some(c) = saved.before(way, way.back(event.at.l_k_bar, RESTART_BEFORE)) {
+                if let Some(c) = saved.before(way, way.back(event.at.l_k_bar, way.restart_before())) {
                     self.restore(c, travel)?;
                     travel.fast_event = Some(event.at.l_k_bar);
                     return Ok(true);
@@ -156,7 +159,7 @@ impl Case<'_> {
             {
                 // The slow phase met its event right after its restart: the
                 // restart was already past the fold. Go back further.
-                if let Some(c) = saved.before(way, way.back(travel.phase_start, RESTART_BEFORE)) {
+                if let Some(c) = saved.before(way, way.back(travel.phase_start, way.restart_before())) {
                     let fast = travel.fast_event;
                     self.restore(c, travel)?;
                     travel.fast_event = fast;
@@ -181,20 +184,24 @@ impl Case<'_> {
     }
 
     /// At the stop condition: a fast approach without an event redoes the
-    /// last `END_REVIEW` of the stage from a checkpoint (returns `true`).
+    /// last `END_REVIEW` of the stage from a checkpoint, once, slowly to the
+    /// end (returns `true`).
     fn review_end(
         &mut self,
         travel: &mut Travel,
         saved: &mut Checkpoints<Checkpoint>,
         l_k_bar: f64,
     ) -> Result<bool, Ending> {
-        if travel.phase != Phase::Approach {
+        if travel.phase != Phase::Approach || travel.reviewed {
             return Ok(false);
         }
-        match saved.before(travel.way, travel.way.back(l_k_bar, END_REVIEW)) {
-            Some(c) => self.restore(c, travel).map(|()| true),
-            None => Ok(false),
-        }
+        let Some(c) = saved.before(travel.way, travel.way.back(l_k_bar, END_REVIEW)) else {
+            return Ok(false);
+        };
+        self.restore(c, travel)?;
+        travel.fast_event = None;
+        travel.reviewed = true;
+        Ok(true)
     }
 
     /// The state to come back to.

@@ -65,3 +65,51 @@ pub(super) fn total_twist(rod: &Rod) -> f64 {
 pub(super) fn clamp_torque(rod: &Rod, stepper: &Stepper) -> f64 {
     0.5 * (stepper.clamp_reaction(rod, End::Finish).1 - stepper.clamp_reaction(rod, End::Start).1)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::external::Environment;
+    use crate::material::Material;
+    use crate::stepper::NewtonOptions;
+
+    /// A straight clamped rod whose finish clamp turns by N turns carries the
+    /// torque M = 2 pi N GJ / l, l the length between the clamped edges'
+    /// middles (where the discrete twist lives), its Lk grows by N and its
+    /// writhe stays zero.
+    #[test]
+    fn a_twisted_straight_rod_carries_the_closed_form_torque() {
+        let k = 21;
+        let points: Vec<Vector3<f64>> = (0..k).map(|i| Vector3::new(i as f64 / 20.0, 0.0, 0.0)).collect();
+        let mut rod = Rod::new(&points, 1e-2, Material::default()).unwrap();
+        rod.clamp(End::Start);
+        rod.clamp(End::Finish);
+        let mut stepper = Stepper::new(&rod, NewtonOptions::default());
+        let mut tracker = Tracker::new(&rod, 0.0);
+        let lk0 = tracker.linking_number(&rod);
+        let (turns, dt, steps) = (1.0, 1e-3, 1000);
+        let dof = rod.clamp_dofs(End::Finish)[6];
+        rod.prescribed_velocity[dof] = TAU * turns / (dt * steps as f64);
+        let env = Environment {
+            damping: 50.0,
+            ..Environment::default()
+        };
+        for step in 0..steps + 2000 {
+            if step == steps {
+                rod.prescribed_velocity[dof] = 0.0;
+            }
+            stepper.step(&mut rod, &env, None, dt).unwrap();
+            tracker.step(&rod);
+        }
+        let length = 1.0 - 1.0 / 20.0;
+        let expected = TAU * turns * rod.section.gj / length;
+        let torque = clamp_torque(&rod, &stepper);
+        assert!(
+            (torque / expected - 1.0).abs() < 1e-6,
+            "{torque} against {expected}"
+        );
+        assert!((tracker.end_turns(&rod) - turns).abs() < 1e-9);
+        assert!((tracker.linking_number(&rod) - lk0 - turns).abs() < 1e-9);
+        assert!(knot::writhe(&rod.positions()).abs() < 1e-9);
+    }
+}

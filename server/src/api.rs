@@ -264,7 +264,7 @@ async fn metrics(State(app): State<App>) -> Result<Response, ApiError> {
         .into_response())
 }
 
-/// The presets (paper Figs 7, 9, 11) with their full definitions.
+/// The presets (paper Figs 7, 9, 11, the hysteresis, twist and materials programs) with their full definitions.
 #[utoipa::path(get, path = "/api/presets", tag = "service", responses((status = 200, body = Vec<Preset>)))]
 async fn list_presets() -> Json<Vec<Preset>> {
     Json(crate::spec::presets())

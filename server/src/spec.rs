@@ -44,7 +44,9 @@ impl Default for Limits {
 /// Every field is optional. `base` sets any case parameter (the rest take the
 /// paper's defaults); `grid` maps parameter names to lists of values, and the
 /// sweep is their cartesian product (axes in alphabetical order, the last axis
-/// varying fastest). With `preset`, the preset's base and grid are used and
+/// varying fastest). Besides the parameters, the axis `material` takes
+/// material names (`GET /api/materials`), each setting `youngs_modulus`,
+/// `density` and `poisson_ratio`. With `preset`, the preset's base and grid are used and
 /// `base` overrides the preset's base (e.g. a coarser `nodes`); `grid` is then
 /// not allowed.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -54,7 +56,8 @@ pub struct SweepSpec {
     /// Display name (at most 200 characters).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// A preset name: `fig7`, `fig9` or `fig11` (see `GET /api/presets`).
+    /// A preset name: `fig7`, `fig9`, `fig11`, `hysteresis`, `twist` or
+    /// `materials` (see `GET /api/presets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preset: Option<String>,
     /// Case parameters common to every case (a partial `CaseParams`).

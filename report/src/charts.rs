@@ -232,6 +232,25 @@ fn span(values: impl Iterator<Item = f64>, log: bool, pad: bool) -> (f64, f64) {
     }
 }
 
+/// A compact tick label: at most 4 significant digits, e-notation for very
+/// small or large values, no trailing zeros.
+pub fn compact(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}").replace(".0e", "e");
+    }
+    let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// Draws `plot` on `area`.
 fn draw(plot: &Plot, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<()> {
     let xs = plot.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
@@ -267,10 +286,15 @@ where
     X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
+    let labels = if plot.log { 4 } else { 10 };
     chart
         .configure_mesh()
         .x_desc(&plot.x_label)
         .y_desc(&plot.y_label)
+        .x_labels(labels)
+        .y_labels(labels)
+        .x_label_formatter(&|v| compact(*v))
+        .y_label_formatter(&|v| compact(*v))
         .light_line_style(WHITE)
         .draw()
         .map_err(|e| anyhow!("{e}"))?;
@@ -482,4 +506,18 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .border_style(BLACK)
         .draw()
         .map_err(|e| anyhow!("{e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::compact;
+
+    #[test]
+    fn tick_labels_are_compact() {
+        assert_eq!(compact(120.93409), "120.9");
+        assert_eq!(compact(0.25), "0.25");
+        assert_eq!(compact(1e-4), "1e-4");
+        assert_eq!(compact(-0.0), "0");
+        assert_eq!(compact(300.0), "300");
+    }
 }

@@ -3,7 +3,7 @@
 //! curve (Fig. 13 c), the snap l̄_k against h and n (Figs. 14, 15) and the
 //! braid's convergence as charts ([`crate::charts::Plot`]); the braid and
 //! loop as drawings (Fig. 12).
-use crate::charts::{LegendAt, Plot, Series, Style, plots_svg};
+use crate::charts::{LegendAt, Plot, Series, Style, compact as label, plots_svg};
 use anyhow::{Result, anyhow};
 use nalgebra::Vector3;
 use plotters::coord::Shift;
@@ -19,24 +19,6 @@ const ORANGE: RGBColor = RGBColor(255, 127, 14);
 const GREEN: RGBColor = RGBColor(44, 160, 44);
 const RED: RGBColor = RGBColor(214, 39, 40);
 const GREY: RGBColor = RGBColor(127, 127, 127);
-
-/// A compact decimal label with at most 4 significant digits.
-fn label(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let a = v.abs();
-    if !(1e-3..1e5).contains(&a) {
-        return format!("{v:.1e}").replace(".0e", "e");
-    }
-    let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
-}
 
 fn series(label: &str, points: Vec<(f64, f64)>, colour: RGBColor, style: Style) -> Series {
     Series {
@@ -468,17 +450,4 @@ fn top_view(area: &Area, params: &Params, braid: &Braid, theta: f64) -> Result<(
         (20.0, f64::from(h) - 24.0),
         BLACK,
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::label;
-
-    #[test]
-    fn labels_are_compact() {
-        assert_eq!(label(120.93409), "120.9");
-        assert_eq!(label(0.25), "0.25");
-        assert_eq!(label(1e-4), "1e-4");
-        assert_eq!(label(0.0), "0");
-    }
 }

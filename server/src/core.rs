@@ -164,6 +164,7 @@ impl Core {
         }
         let summaries = sweeps
             .iter()
+            // A sweep absent from the counts has no case row: no counts.
             .map(|s| SweepSummary::from((s, counts.remove(&s.id).unwrap_or_default())))
             .collect();
         Ok((summaries, total as usize))
@@ -435,6 +436,7 @@ impl Core {
 
     pub async fn health(&self) -> Health {
         let database = self.store.queue_depth().await.is_ok();
+        // Without embedded workers no slot can stall.
         let stalled = self.pool.as_ref().map(|p| p.stalled_slots()).unwrap_or_default();
         Health {
             status: if database && stalled.is_empty() {

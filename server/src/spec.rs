@@ -264,7 +264,7 @@ pub fn base_params(spec: &SweepSpec) -> Result<CaseParams, serde_json::Error> {
         .as_deref()
         .and_then(preset)
         .map(|p| p.base)
-        .unwrap_or_default();
+        .unwrap_or_default(); // no preset: the given base alone
     if let Some(given) = &spec.base {
         base.extend(given.clone());
     }
@@ -291,6 +291,7 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     let mut errors = Vec::new();
     let preset = check_header(spec, limits, &mut errors);
     let names = param_names();
+    // No preset (an unknown one is already an error): the given base alone.
     let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
     if let Some(given) = &spec.base {
         errors.extend(check_object("base", given));

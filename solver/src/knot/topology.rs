@@ -346,6 +346,7 @@ fn det_mod(matrix: &[i64], m: usize, p: u64) -> u64 {
     let mut det = 1;
     for col in 0..m {
         let Some(pivot) = (col..m).find(|&r| a[r * m + col] != 0) else {
+            // A zero column: the matrix is singular modulo p, its determinant 0.
             return 0;
         };
         if pivot != col {

@@ -57,7 +57,7 @@ impl<B: Backend> SqlStore<B> {
             .bind(&idem.key)
             .fetch_optional(&mut *conn)
             .await?;
-        let Some(row) = found else { return Ok(None) };
+        let Some(row) = found else { return Ok(None) }; // a new key: no sweep to replay
         if row.text_or_null("request_hash")?.as_deref() != Some(idem.request_hash.as_str()) {
             return Err(StoreError::Conflict(
                 "Idempotency-Key was already used with a different request".to_string(),

@@ -10,8 +10,8 @@ use solver::protocol::{self, Phase, PhaseSpan, Status};
 /// approach reads about 5 % high from its speed alone (revision 6, whose
 /// damping dragged the sliding rod, read 11-17 % high). The default mesh,
 /// not a coarser one: on the coarsest (K = 158) the inversion moves by more
-/// than 1 % with where the slow pull restarts (BENCHMARKS.md, "Physics
-/// revision 7"), so a 1 % comparison there measures the restart, not the
+/// than 1 % with where the slow pull restarts (CHANGELOG.md, physics
+/// revision 7), so a 1 % comparison there measures the restart, not the
 /// protocol.
 #[test]
 fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {

@@ -506,7 +506,7 @@ pub const PARAMETERS: &[Parameter] = &[
         doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
               points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass \
-              overhand knot. Mind the body limit (64 KiB by default: about 700 points).",
+              overhand knot. Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
     Parameter {

@@ -1,7 +1,8 @@
 //! docs/API.md's section on the case parameters: the table
-//! `solver::case::PARAMETERS` as markdown.
+//! `solver::case::PARAMETERS` as markdown, and the named materials
+//! (`solver::case::MATERIALS`).
 use crate::markdown::{left, table};
-use solver::case::PARAMETERS;
+use solver::case::{MATERIALS, PARAMETERS};
 
 /// The heading that opens the section in docs/API.md.
 pub const HEADING: &str = "## Case parameters (`CaseParams`)";
@@ -29,10 +30,28 @@ pub fn parameters_section() -> String {
             meaning,
         ]
     });
+    let materials = MATERIALS.iter().map(|m| {
+        [
+            format!("`{}`", m.name),
+            format!("{:e}", m.youngs_modulus),
+            m.density.to_string(),
+            m.poisson_ratio.to_string(),
+            format!("{:.3}", 1.0 / (1.0 + m.poisson_ratio)),
+            m.source.to_string(),
+        ]
+    });
     intro
         + &table(
             &left(&["field", "unit", "default", "range", "paper", "meaning"]),
             rows,
+        )
+        + "\n### Materials\n\n\
+           The named materials of the web form's picker, the `material` grid axis and the `materials` preset \
+           (`GET /api/materials`). Inversion does not depend on E or rho (docs/FIDELITY.md, \"Any rod\"); nu does \
+           change it: it sets the twisting stiffness GJ/EI = 1/(1 + nu).\n\n"
+        + &table(
+            &left(&["name", "E (Pa)", "rho (kg/m^3)", "nu", "GJ/EI", "source"]),
+            materials,
         )
 }
 

@@ -280,7 +280,9 @@ pub const PARAMETERS: &[Parameter] = &[
         range: closed(1e3, 1e12),
         null: None,
         paper: "1.8 MPa",
-        doc: "Young's modulus E.",
+        doc: "Young's modulus E. Named materials with their sources: docs/API.md, \"Materials\" \
+              (GET /api/materials). Without gravity the inversion does not depend on E or density: the default \
+              pull is the paper's rate for the rod.",
         value: |p| Some(Value::Number(p.youngs_modulus)),
     },
     Parameter {
@@ -291,7 +293,8 @@ pub const PARAMETERS: &[Parameter] = &[
         range: closed(0.0, 0.5),
         null: None,
         paper: "0.5",
-        doc: "Poisson's ratio nu.",
+        doc: "Poisson's ratio nu. It sets the twisting stiffness GJ/EI = 1/(1 + nu), which moves the \
+              inversion: it is a material constant the geometry does not absorb (docs/FIDELITY.md, \"Any rod\").",
         value: |p| Some(Value::Number(p.poisson_ratio)),
     },
     Parameter {
@@ -302,7 +305,8 @@ pub const PARAMETERS: &[Parameter] = &[
         range: closed(1.0, 1e5),
         null: None,
         paper: "1000 (the code)",
-        doc: "Density rho.",
+        doc: "Density rho. Its weight is physical under gravity; its inertia sets the rod's wave speed \
+              sqrt(E / rho), the time unit the case is computed in.",
         value: |p| Some(Value::Number(p.density)),
     },
     Parameter {

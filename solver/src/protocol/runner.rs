@@ -22,6 +22,9 @@ use std::time::Instant;
 
 /// Penetration (fraction of h) that ends a case as `Penetrated`.
 const MAX_PENETRATION: f64 = 0.5;
+/// What to change when a case fails in a step: the numerical options that
+/// hold contacts and knots together.
+const STEP_HINT: &str = "a smaller dt, adaptive_dt, more nodes or contact_solve \"implicit\" may hold it";
 /// Snapshots kept around the newest sample for those around an event.
 pub(super) const SNAPSHOT_HISTORY: usize = 40;
 
@@ -236,7 +239,7 @@ impl<'a> Case<'a> {
             return Err(Ending::new(
                 Status::Penetrated,
                 format!(
-                    "penetration {:.3} h exceeds {MAX_PENETRATION} h {}",
+                    "penetration {:.3} h exceeds {MAX_PENETRATION} h {}; {STEP_HINT}",
                     max_penetration / self.params.h,
                     during()
                 ),
@@ -262,7 +265,7 @@ impl<'a> Case<'a> {
             return Err(Ending::new(
                 Status::TopologyChanged,
                 format!(
-                    "knot determinant {} {}, expected {}",
+                    "knot determinant {} {}, expected {}: strands passed through each other; {STEP_HINT}",
                     determinant_text(det),
                     when(),
                     self.expected
@@ -298,7 +301,7 @@ impl<'a> Case<'a> {
             let step = self
                 .clock
                 .advance(&mut self.world)
-                .map_err(|e| Ending::new(Status::Diverged, format!("while relaxing: {e}")))?;
+                .map_err(|e| Ending::new(Status::Diverged, format!("while relaxing: {e}; {STEP_HINT}")))?;
             settled_for += step.dt;
             self.report.stats.relax_steps += 1;
             self.carried.twist.step(&self.world.rods[0]);
@@ -347,7 +350,7 @@ impl<'a> Case<'a> {
         }
         let (step, dt) = match self.clock.advance(&mut self.world) {
             Ok(s) => (s.report, s.dt),
-            Err(e) => return Err(Ending::new(Status::Diverged, e.to_string())),
+            Err(e) => return Err(Ending::new(Status::Diverged, format!("{e}; {STEP_HINT}"))),
         };
         let c = &mut self.carried;
         c.time += dt;

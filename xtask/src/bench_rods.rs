@@ -163,11 +163,16 @@ fn measure(binary: &Path, flags: &[String], out: &Path) -> Result<Measured> {
     })
 }
 
-/// Per-stage steps of a report: settle, approach, snap, after, reference.
-fn stage_steps(report: &Value) -> String {
+/// A report's steps by phase (settle, approach, snap, after, reference, ...;
+/// `stages` in reports from before physics revision 8).
+fn phase_steps(report: &Value) -> String {
     let mut totals: Vec<(String, u64)> = Vec::new();
-    for span in report["stages"].as_array().into_iter().flatten() {
-        let stage = span["stage"].as_str().unwrap_or("?").to_string();
+    let (list, key) = match report.get("phases") {
+        Some(p) => (p, "phase"),
+        None => (&report["stages"], "stage"),
+    };
+    for span in list.as_array().into_iter().flatten() {
+        let stage = span[key].as_str().unwrap_or("?").to_string();
         let steps = span["steps"].as_u64().unwrap_or(0);
         match totals.iter_mut().find(|(s, _)| *s == stage) {
             Some((_, n)) => *n += steps,
@@ -238,7 +243,7 @@ fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
         scaling["mass_scale"]
             .as_f64()
             .map_or("-".to_string(), |s| format!("{s:.3e}")),
-        stage_steps(r),
+        phase_steps(r),
     )
 }
 
@@ -285,14 +290,14 @@ pub fn run(args: Args) -> Result<String> {
         writeln!(doc, "\n### {name}\n")?;
         writeln!(
             doc,
-            "`cargo run --release -p xtask -- bench-rods --table {name}` (`{}`)\n",
-            binary.display()
+            "`cargo run --release -p xtask -- bench-rods --table {name}`\n"
         )?;
         writeln!(
             doc,
-            "| rod | status | K | steps | CPU (s) | CPU / first row | l_k bar | F bar falls | kinetic / elastic | mass scale | steps by stage |"
+            "| rod | status | K | steps | CPU (s) | CPU / first row | l_k bar | (arc - l_c) / h | F bar falls | \
+             kinetic / elastic | mass scale | steps by phase |"
         )?;
-        writeln!(doc, "|---|---|---|---|---|---|---|---|---|---|---|")?;
+        writeln!(doc, "|---|---|---|---|---|---|---|---|---|---|---|---|")?;
         for (r, m) in rods.iter().zip(&measured) {
             writeln!(doc, "{}", row(r, m, unit))?;
         }

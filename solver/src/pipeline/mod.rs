@@ -22,7 +22,7 @@ use crate::contact::gauss_seidel::{ContactError, ContactPoint, GaussSeidel, Gaus
 use crate::contact::segment::closest_points;
 use crate::contact::{Candidates, ContactSolve, FrictionLaw, narrow_phase};
 use crate::counters::Counters;
-use crate::energies::{self, Terms};
+use crate::energies::{self, Energies, Terms};
 use crate::external::{Environment, gravity};
 use crate::rod::{Rod, RodState, node_dof, theta_dof};
 use crate::stepper::{NewtonOptions, StepError, StepReport, Stepper};
@@ -90,6 +90,9 @@ pub struct WorldStepReport {
     /// Newton iterations and substeps summed over the rods.
     pub newton_iterations: u32,
     pub substeps: u32,
+    /// The rods' elastic energies (eq. 6) at the step's end, summed: the
+    /// steppers' final Newton iterates'.
+    pub energies: Energies,
 }
 
 /// Why a world step failed.
@@ -553,6 +556,9 @@ impl World {
                 .map_err(|source| WorldError::Step { rod: b, source })?;
             report.newton_iterations += r.newton_iterations;
             report.substeps += r.substeps;
+            report.energies.stretching += r.energies.stretching;
+            report.energies.bending += r.energies.bending;
+            report.energies.twisting += r.energies.twisting;
         }
         Ok(())
     }

@@ -6,7 +6,7 @@ use super::report::{CaseReport, Event, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
-use crate::energies::{self, Terms};
+use crate::energies;
 use crate::external::{Environment, sliding};
 use crate::knot;
 use crate::material::Material;
@@ -180,15 +180,12 @@ pub(super) struct Case<'a> {
     pub(super) program: Vec<LoadStage>,
     pub(super) program_start: f64,
     pub(super) stage: usize,
-    /// Scratch for the energies' gradient.
-    gradient: Vec<f64>,
     started: Instant,
 }
 
 impl<'a> Case<'a> {
     fn new(params: &'a CaseParams, report: CaseReport, world: World, mid: usize, started: Instant) -> Self {
         let dt = params.time_step();
-        let gradient = vec![0.0; world.rods[0].ndof()];
         let clock = TimeStep::new(if params.adaptive_dt {
             AdaptiveOptions::up_to(dt)
         } else {
@@ -218,7 +215,6 @@ impl<'a> Case<'a> {
             program: params.program(),
             program_start: 0.0,
             stage: 0,
-            gradient,
             started,
         }
     }
@@ -307,10 +303,8 @@ impl<'a> Case<'a> {
             self.carried.twist.step(&self.world.rods[0]);
             self.count_step(&step.report);
             self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
-            let rod = &self.world.rods[0];
-            let ke = rod.kinetic_energy();
-            let elastic = energies::evaluate(rod, Terms::ALL, &mut self.gradient, None).total();
-            if ke <= self.params.relax_tolerance * elastic {
+            let ke = self.world.rods[0].kinetic_energy();
+            if ke <= self.params.relax_tolerance * step.report.energies.total() {
                 break;
             }
         }
@@ -421,7 +415,7 @@ impl<'a> Case<'a> {
         (c.impulse, c.impulse_time) = (0.0, 0.0);
         let points = rod.positions();
         let energy_unit = params.bending_stiffness() / params.h;
-        let energies = energies::evaluate(rod, Terms::ALL, &mut self.gradient, None);
+        let energies = step.energies;
         let pairs = self.world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
         let braid = measurements::braid(pairs, c.mid);
         let geometry = braid.map(|b| {

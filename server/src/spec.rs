@@ -586,7 +586,7 @@ mod tests {
             coarse
                 .cases
                 .iter()
-                .all(|c| c.params.nodes == 161 && c.params.h == 1.6e-3)
+                .all(|c| c.params.nodes == Some(161) && c.params.h == 1.6e-3)
         );
     }
 
@@ -600,7 +600,7 @@ mod tests {
         assert_eq!(e.varied, ["mu", "n"]);
         let got: Vec<(f64, u32)> = e.cases.iter().map(|c| (c.params.mu, c.params.n)).collect();
         assert_eq!(got, [(0.1, 1), (0.1, 2), (0.2, 1), (0.2, 2), (0.3, 1), (0.3, 2)]);
-        assert!(e.cases.iter().all(|c| c.params.nodes == 161));
+        assert!(e.cases.iter().all(|c| c.params.nodes == Some(161)));
         let single = expand(&SweepSpec::default(), &Limits::default()).unwrap();
         assert_eq!(single.cases.len(), 1);
         assert_eq!(single.cases[0].params, CaseParams::default());

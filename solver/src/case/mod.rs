@@ -17,7 +17,7 @@ pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};
 pub use scales::{
-    EDGE_RADII, REFERENCE_DT, REFERENCE_EDGE, REFERENCE_RADIUS, Scales, default_nodes, pull_rate,
+    EDGE_RADII, REFERENCE_DT, REFERENCE_EDGE, REFERENCE_RADIUS, SLIDING_MU, Scales, default_nodes, pull_rate,
     reference_pull_rate,
 };
 use serde::{Deserialize, Serialize};
@@ -210,12 +210,13 @@ impl CaseParams {
 
     /// The node count K: `nodes` if given, else the points of
     /// `initial_shape`, else [`default_nodes`] (edges of at most
-    /// [`EDGE_RADII`] h, at least the paper's 301).
+    /// [`EDGE_RADII`] h, at least the paper's 301; half of that below
+    /// [`SLIDING_MU`]).
     pub fn node_count(&self) -> usize {
         match (self.nodes, &self.initial_shape) {
             (Some(k), _) => k,
             (None, Some(points)) => points.len(),
-            (None, None) => default_nodes(self.length, self.h, MAX_NODES),
+            (None, None) => default_nodes(self.length, self.h, self.mu, MAX_NODES),
         }
     }
 

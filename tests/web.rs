@@ -641,6 +641,12 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
         json!(summary["quasi_static"]["holds"] == false),
         "{summary:#}"
     );
+    browser
+        .js(
+            "document.getElementById('curves-h').scrollIntoView(); return true",
+            json!([]),
+        )
+        .await;
     browser.screenshot("hysteresis-case").await;
     server.shutdown().await.unwrap();
 }

@@ -18,6 +18,10 @@ const LABELS = {
   failure: "where it failed",
 };
 
+/** A stage's given fields as text (" to_l_k_bar 120"), its null ones left out. */
+const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
+  .filter(([, v]) => v !== null && v !== undefined).map(([k, v]) => ` ${esc(k)} ${esc(v)}`).join(",");
+
 export async function casePage(main, id) {
   main.innerHTML = `<p><a href="#/">← all sweeps</a> <span id="back"></span></p><h1>Case ${esc(id)}</h1><div id="case">Loading…</div>`;
   let c, snapshots;
@@ -46,7 +50,7 @@ export async function casePage(main, id) {
     <p class="hint">n = ${p.n}, h = ${fmt(p.h * 1e3, 2)} mm, mu = ${p.mu}, L = ${p.length} m, K = ${p.nodes}; attempts ${c.attempts} of ${c.max_attempts}</p>
     ${quasi && quasi.holds === false ? `<p class="warning" id="not-quasi-static" role="note">Not quasi-static: the kinetic energy was ${fmt(quasi.kinetic_ratio, 4)} of the elastic energy
       (median before each event), over the limit of ${fmt(quasi.limit, 4)}. The pull was too fast for this rod: its curves carry inertia; lower pull_speed or keep mass_scaling (docs/API.md, "Loading programs").</p>` : ""}
-    <p class="hint" id="program">Loading program: ${stages.map((st, i) => `${i + 1}. ${esc(stageKind(st))} (${direction(st)})${Object.keys(Object.values(st)[0] || {}).length ? " " + esc(JSON.stringify(Object.values(st)[0])) : ""}`).join(" → ")}${p.loading ? "" : " (the default)"}.
+    <p class="hint" id="program">Loading program: ${stages.map((st, i) => `${i + 1}. ${esc(stageKind(st))} (${direction(st)})${stageArgs(st)}`).join(" → ")}${p.loading ? "" : " (the default)"}.
       ${hysteresis ? `Hysteresis: inverted at l_k bar ${fmt(hysteresis.inversion_l_k_bar, 2)} tightening, flipped back at ${fmt(hysteresis.flip_back_l_k_bar, 2)} loosening, width ${fmt(hysteresis.width, 2)}.` : ""}
       ${quasi && quasi.holds ? `Quasi-static (kinetic / elastic energy ${fmt(quasi.kinetic_ratio, 5)}, limit ${fmt(quasi.limit, 4)}).` : ""}</p>
     <section aria-labelledby="knot-h"><h2 id="knot-h">The knot</h2>

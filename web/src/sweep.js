@@ -17,7 +17,7 @@ export async function sweepPage(main, id) {
     <h1 id="title">Sweep #${esc(id)}</h1>
     <div id="summary" aria-live="polite">Loading…</div>
     <div class="actions" id="actions"></div>
-    <section aria-labelledby="curves-h"><h2 id="curves-h">Tightening curves</h2>
+    <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
       <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div></section>
     <section aria-labelledby="phase-h"><h2 id="phase-h">Phase diagram</h2><div id="phase" class="plot"></div>
       <p class="hint" id="phase-note"></p></section>

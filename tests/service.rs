@@ -818,7 +818,10 @@ async fn materials_route_serves_the_named_materials() {
     // The form's layout of the parameter table: its order and the groups' titles.
     let params = &doc["components"]["schemas"]["CaseParams"];
     assert_eq!(params["x-order"][0], "n", "{params}");
-    assert_eq!(params["x-groups"][1], json!({"name": "rod", "title": "Rod and material"}));
+    assert_eq!(
+        params["x-groups"][1],
+        json!({"name": "rod", "title": "Rod and material"})
+    );
     assert_eq!(params["x-groups"][4]["name"], "solver");
     server.shutdown().await.unwrap();
 }

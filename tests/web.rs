@@ -475,7 +475,10 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
     assert_eq!(layout["dt"], true, "{layout}");
     assert_eq!(layout["n"], false, "{layout}");
     assert_eq!(layout["first"], json!(["n"]), "the table's order: {layout}");
-    assert_eq!(layout["docs"], layout["fields"], "a folded doc per parameter: {layout}");
+    assert_eq!(
+        layout["docs"], layout["fields"],
+        "a folded doc per parameter: {layout}"
+    );
 
     // The material picker fills E, rho and nu from GET /api/materials.
     let (_, materials) = get(&c, &format!("{url}/api/materials")).await;
@@ -504,16 +507,18 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
         ]
     );
     let source = browser
-        .js("return document.getElementById('material-source').textContent", json!([]))
+        .js(
+            "return document.getElementById('material-source').textContent",
+            json!([]),
+        )
         .await;
     assert_eq!(source, steel["source"]);
     // Back to custom: the fields empty again (the rod's defaults).
     assert_eq!(browser.js(pick, json!([""])).await, json!(["", "", ""]));
 
     // The program editor: a preset, a stage added, edited and removed.
-    let program = |script: &str| {
-        format!("{script}; return document.getElementById('loading-json').textContent")
-    };
+    let program =
+        |script: &str| format!("{script}; return document.getElementById('loading-json').textContent");
     let shown = browser
         .js(
             &program("const p = document.getElementById('program-preset'); p.value = 'hysteresis'; p.dispatchEvent(new Event('change'))"),
@@ -531,7 +536,10 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
         .await;
     assert_eq!(shown, r#"[{"pull":{}},{"release":{}},{"hold":{"seconds":0.02}}]"#);
     let preset = browser
-        .js("return document.getElementById('program-preset').value", json!([]))
+        .js(
+            "return document.getElementById('program-preset').value",
+            json!([]),
+        )
         .await;
     assert_eq!(preset, "custom");
     let shown = browser
@@ -564,7 +572,14 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
             Duration::from_secs(20),
         )
         .await;
-    let id: i64 = hash.as_str().unwrap().rsplit('/').next().unwrap().parse().unwrap();
+    let id: i64 = hash
+        .as_str()
+        .unwrap()
+        .rsplit('/')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
     let (_, sweep) = get_sweep(&c, &url, id).await;
     assert_eq!(
         sweep["spec"]["base"]["loading"],

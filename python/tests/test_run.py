@@ -181,17 +181,17 @@ def test_a_loading_program_as_a_list_of_dicts():
 
 
 def test_tighten_then_loosen_reports_each_stage():
-    # QUICK pulled to l_k bar 140, then loosened back to the start: about twice QUICK's run.
-    r = knotsweep.run(**QUICK, loading=[{"pull": {"to_l_k_bar": 140.0}}, {"release": {}}])
+    # QUICK (starting near l_k bar 138) pulled to 132, then loosened back to the start: about QUICK's run.
+    r = knotsweep.run(**QUICK, loading=[{"pull": {"to_l_k_bar": 132.0}}, {"release": {}}])
     assert r.completed, r.reason
-    assert plain(r.params["loading"]) == [{"pull": {"to_l_k_bar": 140.0}}, {"release": {}}]
+    assert plain(r.params["loading"]) == [{"pull": {"to_l_k_bar": 132.0}}, {"release": {}}]
     stage = r.series["stage"]
     assert set(np.unique(stage)) == {0, 1}
     lk = r.series["l_k_bar"]
     tight = lk[stage == 0]
     loose = lk[stage == 1]
-    assert tight.min() == pytest.approx(140.0, abs=1.0)
-    assert loose[-1] > tight.min() + 10, "the release loosens"
+    assert tight.min() == pytest.approx(132.0, abs=1.0)
+    assert loose[-1] > tight.min() + 3, "the release loosens"
     assert {p.stage for p in r.phases} >= {0, 1}
     assert r.phases is r.stages
     assert isinstance(r.events, list) and all(isinstance(e, knotsweep.Event) for e in r.events)

@@ -790,6 +790,42 @@ async fn a_worker_process_releases_its_lease_on_sigterm() {
     server.shutdown().await.unwrap();
 }
 
+/// `GET /api/materials`: the solver's named materials under the case
+/// parameters' names, documented in the OpenAPI document with the
+/// parameter table's order and groups (the web form's layout).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn materials_route_serves_the_named_materials() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let (status, materials) = get(&c, &format!("{url}/api/materials")).await;
+    assert_eq!(status, StatusCode::OK);
+    let names: Vec<&str> = materials
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["rubber", "silicone", "nylon", "nitinol", "steel"]);
+    let steel = &materials[4];
+    assert_eq!(steel["youngs_modulus"], 2.0e11);
+    assert_eq!(steel["density"], 7850.0);
+    assert_eq!(steel["poisson_ratio"], 0.3);
+    assert!(steel["source"].as_str().unwrap().contains("ASTM A228"), "{steel}");
+    let (_, doc) = get(&c, &format!("{url}/api/openapi.json")).await;
+    assert!(doc["paths"].get("/api/materials").is_some());
+    assert!(doc["components"]["schemas"].get("MaterialView").is_some());
+    // The form's layout of the parameter table: its order and the groups' titles.
+    let params = &doc["components"]["schemas"]["CaseParams"];
+    assert_eq!(params["x-order"][0], "n", "{params}");
+    assert_eq!(
+        params["x-groups"][1],
+        json!({"name": "rod", "title": "Rod and material"})
+    );
+    assert_eq!(params["x-groups"][4]["name"], "solver");
+    server.shutdown().await.unwrap();
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn bad_input_gets_a_4xx_with_the_field_and_the_reason() {
     let (_dir, db) = temp_db();

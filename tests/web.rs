@@ -426,6 +426,246 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     server.shutdown().await.unwrap();
 }
 
+/// The form a researcher fills in: the parameters grouped as the table groups
+/// them (the solver's folded away), a material picker that fills E, rho and
+/// nu, and a loading-program editor whose program the submitted sweep
+/// carries; the sweep's phase diagram draws the flip backs, and a case page
+/// of a program that loosens draws tightening and loosening in their own
+/// styles with its events marked.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs() {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => return missing(&why),
+    };
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    browser.open(&format!("{url}/#/")).await;
+    browser
+        .until(
+            "the form",
+            "return document.getElementById('p-h') !== null && document.getElementById('loading-json') !== null",
+            Duration::from_secs(20),
+        )
+        .await;
+
+    // One fieldset per group, in the table's order, with the groups' titles;
+    // the solver's options folded under "advanced"; each doc folded.
+    let layout = browser
+        .js(
+            "const sets = [...document.querySelectorAll('#params fieldset.group')]; \
+             const adv = document.getElementById('advanced'); \
+             return {groups: sets.map((f) => f.dataset.group), legends: sets.map((f) => f.querySelector('legend').textContent), \
+               advanced: adv && adv.tagName === 'DETAILS' && !adv.open, dt: !!document.getElementById('p-dt').closest('details.advanced'), \
+               n: !!document.getElementById('p-n').closest('details.advanced'), \
+               first: [...sets[0].querySelectorAll('.field[data-param]')].map((f) => f.dataset.param).slice(0, 1), \
+               docs: document.querySelectorAll('#params .field details.doc').length, \
+               fields: document.querySelectorAll('#params .field input[id^=\"p-\"], #params .field select[id^=\"p-\"]').length}",
+            json!([]),
+        )
+        .await;
+    assert_eq!(
+        layout["groups"],
+        json!(["knot", "rod", "friction", "loading", "solver"]),
+        "{layout}"
+    );
+    assert_eq!(layout["legends"][1], "Rod and material", "{layout}");
+    assert_eq!(layout["advanced"], true, "the solver's group is folded: {layout}");
+    assert_eq!(layout["dt"], true, "{layout}");
+    assert_eq!(layout["n"], false, "{layout}");
+    assert_eq!(layout["first"], json!(["n"]), "the table's order: {layout}");
+    assert_eq!(
+        layout["docs"], layout["fields"],
+        "a folded doc per parameter: {layout}"
+    );
+
+    // The material picker fills E, rho and nu from GET /api/materials.
+    let (_, materials) = get(&c, &format!("{url}/api/materials")).await;
+    let steel = materials
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "steel")
+        .unwrap()
+        .clone();
+    let pick = "const m = document.getElementById('material'); m.value = arguments[0]; m.dispatchEvent(new Event('change')); \
+        return ['youngs_modulus', 'density', 'poisson_ratio'].map((k) => document.getElementById('p-' + k).value)";
+    let filled = browser.js(pick, json!(["steel"])).await;
+    let numbers: Vec<f64> = filled
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(
+        numbers,
+        [
+            steel["youngs_modulus"].as_f64().unwrap(),
+            steel["density"].as_f64().unwrap(),
+            steel["poisson_ratio"].as_f64().unwrap()
+        ]
+    );
+    let source = browser
+        .js(
+            "return document.getElementById('material-source').textContent",
+            json!([]),
+        )
+        .await;
+    assert_eq!(source, steel["source"]);
+    // Back to custom: the fields empty again (the rod's defaults).
+    assert_eq!(browser.js(pick, json!([""])).await, json!(["", "", ""]));
+
+    // The program editor: a preset, a stage added, edited and removed.
+    let program =
+        |script: &str| format!("{script}; return document.getElementById('loading-json').textContent");
+    let shown = browser
+        .js(
+            &program("const p = document.getElementById('program-preset'); p.value = 'hysteresis'; p.dispatchEvent(new Event('change'))"),
+            json!([]),
+        )
+        .await;
+    assert_eq!(shown, r#"[{"pull":{}},{"release":{}}]"#);
+    let shown = browser
+        .js(
+            &program("document.getElementById('stage-kind').value = 'hold'; document.getElementById('stage-add').click(); \
+                const s = document.querySelector('[data-stage=\"2\"][data-key=\"seconds\"]'); s.value = '0.02'; \
+                s.dispatchEvent(new Event('input', {bubbles: true}))"),
+            json!([]),
+        )
+        .await;
+    assert_eq!(shown, r#"[{"pull":{}},{"release":{}},{"hold":{"seconds":0.02}}]"#);
+    let preset = browser
+        .js(
+            "return document.getElementById('program-preset').value",
+            json!([]),
+        )
+        .await;
+    assert_eq!(preset, "custom");
+    let shown = browser
+        .js(
+            &program("document.querySelector('[data-remove=\"2\"]').click()"),
+            json!([]),
+        )
+        .await;
+    assert_eq!(shown, r#"[{"pull":{}},{"release":{}}]"#);
+
+    // Submit: tightened past the snap (near l_k bar 116), then loosened back.
+    let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
+    let mut fields = serde_json::Map::new();
+    for (k, v) in base.as_object().unwrap() {
+        let text = v.as_str().map_or_else(|| v.to_string(), str::to_string);
+        fields.insert(format!("p-{k}"), json!(text));
+    }
+    fields.insert("g-mu".into(), json!("0.1, 0.15"));
+    browser.js(FILL, json!([fields])).await;
+    browser
+        .js(
+            "document.querySelector('#custom button[type=submit]').click(); return true",
+            json!([]),
+        )
+        .await;
+    let hash = browser
+        .until(
+            "the sweep page",
+            "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash",
+            Duration::from_secs(20),
+        )
+        .await;
+    let id: i64 = hash
+        .as_str()
+        .unwrap()
+        .rsplit('/')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let (_, sweep) = get_sweep(&c, &url, id).await;
+    assert_eq!(
+        sweep["spec"]["base"]["loading"],
+        json!([{"pull": {}}, {"release": {}}]),
+        "{sweep:#}"
+    );
+    assert_eq!(sweep["total"], 2);
+
+    // The phase diagram: a flip back and a band per point with hysteresis.
+    let t = Instant::now();
+    loop {
+        let (_, s) = get(&c, &format!("{url}/api/sweeps/{id}")).await;
+        if s["status"] == "done" {
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(300), "not done: {s:#}");
+        tokio::time::sleep(Duration::from_millis(500)).await;
+    }
+    let (_, pd) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    let flipped = pd["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| !p["hysteresis"].is_null())
+        .count();
+    let unsteady = pd["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| !p["inversion"].is_null() && p["quasi_static"]["holds"] == false)
+        .count();
+    let drawn = browser
+        .until(
+            "the phase diagram",
+            "const p = document.getElementById('phase'); return p && p.dataset.flips !== undefined && [p.dataset.flips, p.dataset.band, p.dataset.unsteady]",
+            Duration::from_secs(30),
+        )
+        .await;
+    assert_eq!(
+        drawn,
+        json!([flipped.to_string(), flipped.to_string(), unsteady.to_string()]),
+        "{pd:#}"
+    );
+    println!("{flipped} of 2 points with hysteresis, {unsteady} not quasi-static");
+    browser.screenshot("hysteresis-sweep").await;
+
+    // A case of the program: its tightening and loosening drawn in both styles,
+    // its events marked, and its quasi-staticity as the report has it.
+    let case_id = pd["points"][0]["case_id"].as_i64().unwrap();
+    browser.open(&format!("{url}/#/cases/{case_id}")).await;
+    let styles = browser
+        .until(
+            "the curves",
+            "const f = document.getElementById('plot-f'); return f && f.dataset.directions && [f.dataset.directions, f.dataset.events, \
+             document.getElementById('plot-h').dataset.directions, document.querySelectorAll('#plot-e canvas').length, \
+             document.getElementById('not-quasi-static') !== null]",
+            Duration::from_secs(20),
+        )
+        .await;
+    assert_eq!(styles[0], "loosen,tighten", "{styles}");
+    assert_eq!(styles[2], "loosen,tighten", "{styles}");
+    assert_eq!(styles[3], 1, "the energy plot: {styles}");
+    let (_, case) = get(&c, &format!("{url}/api/cases/{case_id}")).await;
+    let summary = &case["result"]["summary"];
+    let kinds: Vec<&str> = summary["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(styles[1], kinds.join(","), "every event marked: {styles}");
+    assert_eq!(
+        styles[4],
+        json!(summary["quasi_static"]["holds"] == false),
+        "{summary:#}"
+    );
+    browser
+        .js(
+            "document.getElementById('curves-h').scrollIntoView(); return true",
+            json!([]),
+        )
+        .await;
+    browser.screenshot("hysteresis-case").await;
+    server.shutdown().await.unwrap();
+}
+
 /// Cases of the sweep with an inversion, and those among them through which
 /// F bar does not fall.
 async fn sweep_inversions(c: &reqwest::Client, url: &str, id: i64) -> (usize, usize) {

@@ -7,7 +7,20 @@ table, docs/API.md); ``knotsweep.Client(url)`` submits sweeps to a running
 """
 from ._native import PHYSICS_REVISION, ParameterError, __version__
 from ._params import PARAMETERS, Parameter
-from ._run import Inversion, Progress, Record, Result, Snapshot, Stage, Stats, run, validate
+from ._run import (
+    Event,
+    Hysteresis,
+    Inversion,
+    Progress,
+    QuasiStatic,
+    Record,
+    Result,
+    Snapshot,
+    Stage,
+    Stats,
+    run,
+    validate,
+)
 from .client import ApiError, Client, Conflict, InvalidInput, NotFound, Sweep, Unauthorized
 
 __all__ = [
@@ -16,12 +29,15 @@ __all__ = [
     "ApiError",
     "Client",
     "Conflict",
+    "Event",
+    "Hysteresis",
     "InvalidInput",
     "Inversion",
     "NotFound",
     "Parameter",
     "ParameterError",
     "Progress",
+    "QuasiStatic",
     "Record",
     "Result",
     "Snapshot",

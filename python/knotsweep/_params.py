@@ -13,6 +13,10 @@ class Parameter(NamedTuple):
     """One case parameter, as the solver's table documents it."""
 
     name: str
+    group: str
+    """The part of the case it belongs to: ``knot``, ``rod``, ``friction``,
+    ``loading`` or ``solver`` (the web form's sections, the API's ``x-group``)."""
+    group_title: str
     unit: str
     default: str
     """The default as JSON text (``null`` for none)."""
@@ -22,7 +26,7 @@ class Parameter(NamedTuple):
     doc: str
     description: str
     kind: str
-    """``int``, ``float``, ``vector``, ``flag``, ``words`` or ``points``."""
+    """``int``, ``float``, ``vector``, ``flag``, ``words``, ``points`` or ``program``."""
     words: tuple[str, ...]
 
     @property
@@ -40,6 +44,7 @@ class Parameter(NamedTuple):
             "vector": "Sequence[float]",
             "flag": "bool",
             "points": "ArrayLike",
+            "program": "Sequence[Mapping[str, Mapping[str, Any]]]",
         }.get(self.kind)
         if self.kind == "words":
             base = "Literal[" + ", ".join(json.dumps(w) for w in self.words) + "]"
@@ -70,3 +75,14 @@ PARAMETERS: tuple[Parameter, ...] = tuple(
 """Every case parameter, in the table's order."""
 
 NAMES: tuple[str, ...] = tuple(p.name for p in PARAMETERS)
+
+GROUPS: tuple[tuple[str, str], ...] = tuple(dict.fromkeys((p.group, p.group_title) for p in PARAMETERS))
+"""The groups (word, title) in the table's order of first appearance."""
+
+
+def grouped() -> list[tuple[str, str, list[Parameter]]]:
+    """The parameters by group in form order (knot, rod, friction, loading,
+    solver): (word, title, parameters in the table's order)."""
+    order = ("knot", "rod", "friction", "loading", "solver")
+    groups = sorted(GROUPS, key=lambda g: order.index(g[0]) if g[0] in order else len(order))
+    return [(word, title, [p for p in PARAMETERS if p.group == word]) for word, title in groups]

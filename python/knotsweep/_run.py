@@ -11,7 +11,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 
 from . import _native
-from ._params import PARAMETERS
+from ._params import grouped
 
 
 class Record(dict):
@@ -41,9 +41,28 @@ class Stats(Record):
 
 
 class Stage(Record):
-    """A stretch of the run in one stage (``settle``, ``reference``,
-    ``approach``, ``snap``, ``after``): ``stage``, ``from_l_k_bar``,
-    ``to_l_k_bar``, ``steps``, ``newton_iterations``, ``contact_sweeps``."""
+    """A stretch of the run in one step phase (``settle``, ``reference``,
+    ``approach``, ``snap``, ``after``, ``hold``, ``rotate``): ``phase``,
+    ``stage`` (the loading program's stage index, None for the relaxation),
+    ``from_l_k_bar``, ``to_l_k_bar``, ``steps``, ``newton_iterations``,
+    ``contact_sweeps``."""
+
+
+class Event(Record):
+    """A snap of the loop in one stage of the loading program: ``stage``
+    (index), ``direction`` (``tighten``, ``loosen``), ``kind`` (``inversion``,
+    ``flip_back``), ``clean``, and the inversion's quantities (``l_k_bar``,
+    ``F_bar_before``, ``F_bar_after``, ``H_bar_before``, ``H_bar_after``, ...)."""
+
+
+class Hysteresis(Record):
+    """The loop snapped at ``inversion_l_k_bar`` while tightened and flipped
+    back at ``flip_back_l_k_bar`` while loosened; ``width`` is their difference."""
+
+
+class QuasiStatic(Record):
+    """Whether the loading was quasi-static: ``kinetic_ratio`` (median kinetic
+    over elastic energy before each event), ``limit``, ``holds``."""
 
 
 class Snapshot(Record):
@@ -69,9 +88,15 @@ class Result:
     parameter, defaults filled in); ``inversion`` (None when there is none);
     ``series`` (numpy arrays by the columns of ``knotsweep run --csv``:
     ``l_k_bar``, ``F_bar``, ``H_bar``, ...); ``snapshots``; ``stats``;
-    ``stages``; ``writhe`` and ``start_twist`` (turns); the knot determinants
-    ``determinant_initial`` and ``determinant_final``; ``report``, the whole
-    report as a dict (without the series)."""
+    ``phases`` (the run's step phases, each with its loading stage; ``stages``
+    is the same list under its former name); ``events`` (every inversion and
+    flip back of every stage of the loading program), ``hysteresis`` (None
+    unless a loosening stage saw the loop flip back) and ``quasi_static``
+    (None where no sample was taken at ``pull_speed``); ``scaling`` (time
+    step, mass scale, time unit, pull rates); ``writhe`` and ``start_twist``
+    (turns); the knot determinants ``determinant_initial`` and
+    ``determinant_final``; ``report``, the whole report as a dict (without
+    the series)."""
 
     def __init__(self, report: dict, series: dict[str, np.ndarray]):
         self.report = report
@@ -83,7 +108,15 @@ class Result:
         self.series: dict[str, np.ndarray] = series
         self.snapshots: list[Snapshot] = [_snapshot(s) for s in report.get("snapshots", [])]
         self.stats = Stats(report.get("stats", {}))
-        self.stages: list[Stage] = [Stage(s) for s in report.get("stages", [])]
+        self.phases: list[Stage] = [Stage(s) for s in report.get("phases", report.get("stages", []))]
+        self.stages: list[Stage] = self.phases
+        self.events: list[Event] = [Event(e) for e in report.get("events", [])]
+        hysteresis = report.get("hysteresis")
+        self.hysteresis: Hysteresis | None = Hysteresis(hysteresis) if hysteresis is not None else None
+        quasi = report.get("quasi_static")
+        self.quasi_static: QuasiStatic | None = QuasiStatic(quasi) if quasi is not None else None
+        scaling = report.get("scaling")
+        self.scaling: Record | None = Record(scaling) if scaling is not None else None
         self.writhe: float = report.get("writhe", 0.0)
         self.start_twist: float = report.get("start_twist", 0.0)
         self.determinant_initial: int | None = report.get("determinant_initial")
@@ -168,9 +201,13 @@ def validate(**params: Any) -> dict:
 
 
 def _run_doc() -> str:
-    lines = "\n".join(
-        textwrap.fill(p.docline, width=100, initial_indent="    ", subsequent_indent="        ")
-        for p in PARAMETERS
+    lines = "\n\n".join(
+        f"  {title}:\n"
+        + "\n".join(
+            textwrap.fill(p.docline, width=100, initial_indent="    ", subsequent_indent="        ")
+            for p in params
+        )
+        for _, title, params in grouped()
     )
     return (
         "Runs one overhand-knot tightening case and returns its Result.\n\n"
@@ -182,7 +219,9 @@ def _run_doc() -> str:
         "progress: True shows a progress bar (tqdm, if installed); a callable is called with a\n"
         "    Progress(fraction, l_k_bar, H_bar, steps) after every sample, and returning False\n"
         "    stops the case (status 'cancelled').\n\n"
-        "Case parameters (SI units):\n" + lines + "\n"
+        "loading: a list of stages (dicts), e.g. [{'pull': {}}, {'release': {}}] (docs/API.md,\n"
+        "    Loading programs).\n\n"
+        "Case parameters (SI units), by group:\n" + lines + "\n"
     )
 
 
@@ -191,6 +230,7 @@ run.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
     [inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None)]
     + [
         inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, default=p.default_value)
-        for p in PARAMETERS
+        for _, _, params in grouped()
+        for p in params
     ]
 )

@@ -129,14 +129,20 @@ class Client:
         name: str | None = None,
         idempotency_key: str | None = None,
         certify: bool = False,
+        loading: list[dict] | None = None,
     ) -> Sweep:
         """Submits a sweep: a ``preset`` (``fig7``, ``fig9``, ``fig11``; ``base``
         overrides its base) or a ``base`` case and a ``grid`` (parameter name
         -> list of values; the cartesian product). ``certify=True`` also runs
         each case's refined twin (time step halved) so that every point of the
         phase diagram gets its numerical uncertainty (about 3x the cost). A
-        retry with the same ``idempotency_key`` returns the first sweep. Raises
+        retry with the same ``idempotency_key`` returns the first sweep.
+        ``loading`` is the base's loading program, a list of one-key stages
+        (``[{"pull": {}}, {"release": {}}]``; docs/API.md, "Loading
+        programs"), the same as ``base={"loading": [...]}``. Raises
         InvalidInput (a ValueError) with the API's message and fields."""
+        if loading is not None:
+            base = {**(base or {}), "loading": [dict(stage) for stage in loading]}
         spec: dict[str, Any] = {}
         for key, value in (("name", name), ("preset", preset), ("base", base), ("grid", grid)):
             if value is not None:

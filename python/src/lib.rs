@@ -9,7 +9,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Value};
-use solver::case::{PARAMETERS, ParamError, Range, ValidCase};
+use solver::case::{Group, PARAMETERS, ParamError, Range, ValidCase};
 use solver::measurements::{COLUMNS, Column, Sample};
 use solver::protocol::{self, Progress, Status};
 use std::time::{Duration, Instant};
@@ -49,6 +49,17 @@ fn to_json(value: &Bound<'_, PyAny>) -> Result<Value, String> {
     }
     if value.is_instance_of::<PyString>() {
         return Ok(Value::String(value.extract::<String>().map_err(reason)?));
+    }
+    if let Ok(dict) = value.cast::<PyDict>() {
+        // A loading program's stage: {"pull": {"to_l_k_bar": 120.0}}.
+        let mut object = Map::new();
+        for (key, item) in dict.iter() {
+            let key = key
+                .extract::<String>()
+                .map_err(|_| format!("invalid key {key}: keys must be strings"))?;
+            object.insert(key, to_json(&item)?);
+        }
+        return Ok(Value::Object(object));
     }
     if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
         let items: Vec<Bound<'_, PyAny>> = value.extract().map_err(reason)?;
@@ -211,9 +222,17 @@ fn series_arrays<'py>(py: Python<'py>, series: &[Sample]) -> PyResult<Bound<'py,
     Ok(out)
 }
 
+/// A group's word, as the API's `x-group` writes it.
+fn group_word(group: Group) -> String {
+    match serde_json::to_value(group) {
+        Ok(Value::String(word)) => word,
+        _ => format!("{group:?}").to_lowercase(),
+    }
+}
+
 /// The parameter table (`solver::case::PARAMETERS`): one dict per parameter
-/// with name, unit, default (JSON text), range, null, paper, doc,
-/// description, kind (int, float, vector, flag, words, points) and words.
+/// with name, group (its word and title, in form order), unit, default (JSON text), range, null, paper, doc,
+/// description, kind (int, float, vector, flag, words, points, program) and words.
 #[pyfunction]
 fn parameters(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let list = PyList::empty(py);
@@ -226,8 +245,11 @@ fn parameters(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             Range::Flag => ("flag", &[]),
             Range::Words(words) => ("words", words),
             Range::Points => ("points", &[]),
+            Range::Program => ("program", &[]),
         };
         entry.set_item("name", p.name)?;
+        entry.set_item("group", group_word(p.group))?;
+        entry.set_item("group_title", p.group.title())?;
         entry.set_item("unit", p.unit)?;
         entry.set_item("default", p.default)?;
         entry.set_item("range", p.range_text())?;

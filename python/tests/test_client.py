@@ -72,4 +72,13 @@ def test_cancel(client):
     sweep.cancel()
     done = sweep.wait(progress=False, timeout=300)
     assert done["status"] == "cancelled", done
-    assert len(client.presets()) == 3 and any(s["id"] == sweep.id for s in client.sweeps())
+    assert {"fig7", "fig9", "fig11"} <= {p["name"] for p in client.presets()} and any(s["id"] == sweep.id for s in client.sweeps())
+
+
+def test_submit_carries_a_loading_program(client):
+    program = [{"pull": {"to_l_k_bar": 132.0}}, {"release": {}}]
+    sweep = client.submit(base=QUICK, loading=program, name="python loading")
+    spec = sweep.status()["spec"]
+    assert spec["base"]["loading"] == program
+    assert spec["base"]["nodes"] == QUICK["nodes"]
+    sweep.cancel()

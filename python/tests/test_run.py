@@ -39,7 +39,8 @@ def test_same_inversion_and_series_as_the_cli(knotsweep_bin, tmp_path):
     for column, values in r.series.items():
         assert np.array_equal(values, table[column]), column
     assert r.stats.steps == cli["stats"]["steps"]
-    assert [s["stage"] for s in r.report["stages"]] == [s["stage"] for s in cli["stages"]]
+    assert [s["phase"] for s in r.report["phases"]] == [s["phase"] for s in cli["phases"]]
+    assert r.events == cli["events"] and r.quasi_static == cli["quasi_static"]
     assert len(r.snapshots) == len(cli["snapshots"])
     for mine, theirs in zip(r.snapshots, cli["snapshots"]):
         assert mine.label == theirs["label"]
@@ -149,3 +150,53 @@ def test_ctrl_c_stops_a_run():
     finally:
         timer.cancel()
     assert time.perf_counter() - started < 5.0
+
+
+def test_parameters_come_in_groups():
+    groups = [word for word, _, _ in knotsweep._params.grouped()]
+    assert groups == ["knot", "rod", "friction", "loading", "solver"]
+    loading = next(p for p in knotsweep.PARAMETERS if p.name == "loading")
+    assert (loading.group, loading.kind, loading.default_value) == ("loading", "program", None)
+    assert loading.annotation == "Sequence[Mapping[str, Mapping[str, Any]]] | None"
+    doc = knotsweep.run.__doc__
+    assert doc.index("Knot:") < doc.index("Rod and material:") < doc.index("Solver (advanced):")
+
+
+def plain(program):
+    """A program without its null fields (a release's target, when left out, comes back as null)."""
+    return [{k: {f: v for f, v in body.items() if v is not None} for k, body in stage.items()} for stage in program]
+
+
+def test_a_loading_program_as_a_list_of_dicts():
+    program = [{"pull": {"to_l_k_bar": 150.0}}, {"hold": {"seconds": 0.5}}, {"release": {}}]
+    assert plain(knotsweep.validate(loading=program)["loading"]) == program
+    assert plain(knotsweep.validate(loading=tuple(program))["loading"]) == program
+    with pytest.raises(ValueError, match=r"^loading: stage 2 \(hold\): seconds must be in") as e:
+        knotsweep.validate(loading=[{"pull": {}}, {"hold": {"seconds": -1.0}}])
+    assert e.value.fields[0][0] == "loading"
+    with pytest.raises(ValueError, match=r"^loading: "):
+        knotsweep.validate(loading=[{"twirl": {}}])
+    with pytest.raises(ValueError, match=r"^loading: invalid key 1"):
+        knotsweep.validate(loading=[{1: {}}])
+
+
+def test_tighten_then_loosen_reports_each_stage():
+    # QUICK (starting near l_k bar 138) pulled to 132, then loosened back to the start: about QUICK's run.
+    r = knotsweep.run(**QUICK, loading=[{"pull": {"to_l_k_bar": 132.0}}, {"release": {}}])
+    assert r.completed, r.reason
+    assert plain(r.params["loading"]) == [{"pull": {"to_l_k_bar": 132.0}}, {"release": {}}]
+    stage = r.series["stage"]
+    assert set(np.unique(stage)) == {0, 1}
+    lk = r.series["l_k_bar"]
+    tight = lk[stage == 0]
+    loose = lk[stage == 1]
+    assert tight.min() == pytest.approx(132.0, abs=1.0)
+    assert loose[-1] > tight.min() + 3, "the release loosens"
+    assert {p.stage for p in r.phases} >= {0, 1}
+    assert r.phases is r.stages
+    assert isinstance(r.events, list) and all(isinstance(e, knotsweep.Event) for e in r.events)
+    for e in r.events:
+        assert e.direction == ("tighten" if e.stage == 0 else "loosen")
+    assert r.hysteresis is None or r.hysteresis.width == pytest.approx(
+        r.hysteresis.flip_back_l_k_bar - r.hysteresis.inversion_l_k_bar)
+    assert r.quasi_static is None or isinstance(r.quasi_static.holds, bool)

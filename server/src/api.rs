@@ -8,6 +8,7 @@
 //! | `GET /api/openapi.json`, `GET /api/docs` | OpenAPI document, Swagger UI (embedded, offline) |
 //! | `GET /api/presets` | the presets with their full definitions |
 //! | `GET /api/limits` | the limits below and the certification threshold |
+//! | `GET /api/materials` | the named materials (E, rho, nu and their source) |
 //! | `POST /api/sweeps` | submit (`Idempotency-Key` header honoured) |
 //! | `GET /api/sweeps`, `GET /api/sweeps/{id}` | list, detail (counts, progress, ETA) |
 //! | `POST /api/sweeps/{id}/pause`, `/resume`, `/cancel` | control |
@@ -72,6 +73,7 @@ pub fn router(app: App) -> Router {
         .route("/metrics", get(metrics))
         .route("/api/presets", get(list_presets))
         .route("/api/limits", get(get_limits))
+        .route("/api/materials", get(list_materials))
         .route("/api/sweeps", post(submit_sweep).get(list_sweeps))
         .route("/api/sweeps/{id}", get(get_sweep))
         .route("/api/sweeps/{id}/cases", get(sweep_cases))
@@ -116,12 +118,12 @@ pub fn openapi() -> OpenApiDoc {
     ),
     paths(
         submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
-        phase_diagram, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, healthz, metrics
+        phase_diagram, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
     ),
     components(schemas(
         SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
         SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
-        LogLineView, Health, SweepEvent, RunningCase, ServiceLimits
+        LogLineView, Health, SweepEvent, RunningCase, ServiceLimits, MaterialView
     )),
     modifiers(&Extras),
     tags(
@@ -137,15 +139,38 @@ struct Extras;
 impl Modify for Extras {
     fn modify(&self, openapi: &mut OpenApiDoc) {
         let components = openapi.components.get_or_insert_with(Default::default);
-        components.schemas.insert(
-            "CaseParams".to_string(),
-            RefOr::T(crate::openapi::case_params_schema()),
-        );
+        let mut params = crate::openapi::case_params_schema();
+        if let utoipa::openapi::schema::Schema::Object(object) = &mut params {
+            object
+                .extensions
+                .get_or_insert_with(Default::default)
+                .merge(form_layout());
+        }
+        components
+            .schemas
+            .insert("CaseParams".to_string(), RefOr::T(params));
         components.add_security_scheme(
             "bearer",
             SecurityScheme::Http(HttpBuilder::new().scheme(HttpAuthScheme::Bearer).build()),
         );
     }
+}
+
+/// The form's layout of the parameter table for the CaseParams schema (whose
+/// properties a JSON object lists alphabetically): `x-order`, the parameters
+/// in the table's order, and `x-groups`, each group's name and title in form
+/// order (`solver::case::Group`).
+fn form_layout() -> utoipa::openapi::extensions::Extensions {
+    use solver::case::{Group, PARAMETERS};
+    let order: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
+    let groups: Vec<serde_json::Value> = Group::ALL
+        .iter()
+        .map(|g| serde_json::json!({"name": g, "title": g.title()}))
+        .collect();
+    utoipa::openapi::extensions::Extensions::from_iter([
+        ("x-order", serde_json::json!(order)),
+        ("x-groups", serde_json::json!(groups)),
+    ])
 }
 
 fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
@@ -275,6 +300,42 @@ async fn list_presets() -> Json<Vec<Preset>> {
 #[utoipa::path(get, path = "/api/limits", tag = "service", responses((status = 200, body = ServiceLimits)))]
 async fn get_limits(State(app): State<App>) -> Json<ServiceLimits> {
     Json(ServiceLimits::new(app.core.limits(), MAX_PAGE))
+}
+
+/// A named material: its elastic constants under the case parameters' names,
+/// so that a client sets them as they are (`solver::case::NamedMaterial`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, utoipa::ToSchema)]
+pub struct MaterialView {
+    /// `rubber` (the paper's), `silicone`, `nylon`, `nitinol`, `steel`.
+    pub name: String,
+    /// Young's modulus E (Pa).
+    pub youngs_modulus: f64,
+    /// Density rho (kg/m^3).
+    pub density: f64,
+    /// Poisson's ratio nu.
+    pub poisson_ratio: f64,
+    /// What the rod is and where its constants come from.
+    pub source: String,
+}
+
+impl From<&solver::case::NamedMaterial> for MaterialView {
+    fn from(m: &solver::case::NamedMaterial) -> Self {
+        Self {
+            name: m.name.to_string(),
+            youngs_modulus: m.youngs_modulus,
+            density: m.density,
+            poisson_ratio: m.poisson_ratio,
+            source: m.source.to_string(),
+        }
+    }
+}
+
+/// The named materials (`solver::case::MATERIALS`): E, rho and nu under the
+/// case parameters' names (`youngs_modulus`, `density`, `poisson_ratio`) with
+/// their source, for a form's material picker.
+#[utoipa::path(get, path = "/api/materials", tag = "service", responses((status = 200, body = Vec<MaterialView>)))]
+async fn list_materials() -> Json<Vec<MaterialView>> {
+    Json(solver::case::MATERIALS.iter().map(MaterialView::from).collect())
 }
 
 /// Submit a sweep: a base case plus a grid, or a preset.

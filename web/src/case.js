@@ -5,6 +5,7 @@ import { get } from "./api.js";
 import { esc, fmt, duration, notice, $ } from "./util.js";
 import { overlay } from "./plot.js";
 import { KnotView } from "./knot3d.js";
+import { program, stageCurves, stageKind, direction } from "./stages.js";
 
 const LABELS = {
   relaxed: "relaxed start",
@@ -16,6 +17,10 @@ const LABELS = {
   final: "end of the pull",
   failure: "where it failed",
 };
+
+/** A stage's given fields as text (" to_l_k_bar 120"), its null ones left out. */
+const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
+  .filter(([, v]) => v !== null && v !== undefined).map(([k, v]) => ` ${esc(k)} ${esc(v)}`).join(",");
 
 export async function casePage(main, id) {
   main.innerHTML = `<p><a href="#/">← all sweeps</a> <span id="back"></span></p><h1>Case ${esc(id)}</h1><div id="case">Loading…</div>`;
@@ -30,6 +35,11 @@ export async function casePage(main, id) {
   const r = c.result;
   const inv = r && r.inversion;
   const p = c.params;
+  const summary = (r && r.summary) || {};
+  const events = summary.events || [];
+  const hysteresis = summary.hysteresis || null;
+  const quasi = summary.quasi_static || null;
+  const stages = program(p);
   snapshots = (snapshots || []).slice().sort((a, b) => b.l_k_bar - a.l_k_bar);
   const invIndex = snapshots.findIndex((f) => f.label === "at_inversion");
   $("#case").innerHTML = `
@@ -38,6 +48,11 @@ export async function casePage(main, id) {
       ${inv ? ` · inversion at l_k bar ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), F bar ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, H bar ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r ? " · no inversion" : ""}
       ${r ? ` · ${duration(r.wall_time)} on ${esc(r.worker)}` : ` · progress ${fmt(100 * c.progress, 0)} %`}</p>
     <p class="hint">n = ${p.n}, h = ${fmt(p.h * 1e3, 2)} mm, mu = ${p.mu}, L = ${p.length} m, K = ${p.nodes}; attempts ${c.attempts} of ${c.max_attempts}</p>
+    ${quasi && quasi.holds === false ? `<p class="warning" id="not-quasi-static" role="note">Not quasi-static: the kinetic energy was ${fmt(quasi.kinetic_ratio, 4)} of the elastic energy
+      (median before each event), over the limit of ${fmt(quasi.limit, 4)}. The pull was too fast for this rod: its curves carry inertia; lower pull_speed or keep mass_scaling (docs/API.md, "Loading programs").</p>` : ""}
+    <p class="hint" id="program">Loading program: ${stages.map((st, i) => `${i + 1}. ${esc(stageKind(st))} (${direction(st)})${stageArgs(st)}`).join(" → ")}${p.loading ? "" : " (the default)"}.
+      ${hysteresis ? `Hysteresis: inverted at l_k bar ${fmt(hysteresis.inversion_l_k_bar, 2)} tightening, flipped back at ${fmt(hysteresis.flip_back_l_k_bar, 2)} loosening, width ${fmt(hysteresis.width, 2)}.` : ""}
+      ${quasi && quasi.holds ? `Quasi-static (kinetic / elastic energy ${fmt(quasi.kinetic_ratio, 5)}, limit ${fmt(quasi.limit, 4)}).` : ""}</p>
     <section aria-labelledby="knot-h"><h2 id="knot-h">The knot</h2>
       <div id="knot" class="knot"></div>
       <div class="slider">
@@ -49,8 +64,15 @@ export async function casePage(main, id) {
       <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${snapshots.length} stored snapshots${invIndex >= 0 ? "; the inversion's is marked ★" : ""}.
         Beads mark the loaded contacts, coloured from blue (weakest) to red (strongest force of the snapshot).</p>
     </section>
-    <section aria-labelledby="curves-h"><h2 id="curves-h">Tightening curves</h2>
-      <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div></section>
+    <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
+      <p class="hint">Solid: tightening; dashed: loosening; dotted: holding or rotating. ● an inversion, ◇ a flip back.</p>
+      <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div>
+      ${events.length ? `<div class="table-wrap"><table class="events" id="events"><thead><tr><th scope="col">Stage</th><th scope="col">Event</th><th scope="col">l_k bar</th>
+        <th scope="col">F bar before → after</th><th scope="col">H bar before → after</th><th scope="col">Kinetic energy ×</th><th scope="col">Clean</th></tr></thead><tbody>
+        ${events.map((e) => `<tr data-kind="${esc(e.kind)}"><td>${e.stage + 1}. ${esc(stageKind(stages[e.stage]))} (${esc(e.direction)})</td><td>${e.kind === "flip_back" ? "flip back" : "inversion"}</td>
+          <td>${fmt(e.l_k_bar, 2)}</td><td>${fmt(e.F_bar_before, 4)} → ${fmt(e.F_bar_after, 4)}</td><td>${fmt(e.H_bar_before, 3)} → ${fmt(e.H_bar_after, 3)}</td>
+          <td>${fmt(e.kinetic_energy_ratio, 1)}</td><td>${e.clean ? "yes" : "no"}</td></tr>`).join("")}</tbody></table></div>` : ""}
+      <h3>Energies</h3><div class="plots"><div id="plot-e" class="plot"></div></div></section>
     <section aria-labelledby="dl-h"><h2 id="dl-h">Series and downloads</h2>
       <p><a href="/api/cases/${esc(id)}/series.csv" download="case-${esc(id)}.csv">series (CSV)</a> ·
         <a href="/api/cases/${esc(id)}" download="case-${esc(id)}.json">case (JSON)</a> ·
@@ -59,10 +81,14 @@ export async function casePage(main, id) {
         <a href="/api/cases/${esc(id)}/figures/H_bar.svg" download="case-${esc(id)}-H_bar.svg">H bar figure (SVG)</a></p>
       <div class="table-wrap series"><table id="series"></table></div></section>`;
   const series = c.series || [];
-  const mark = inv ? inv.l_k_bar : null;
-  const f = series.length ? overlay($("#plot-f"), { title: "F bar against l_k bar", x: "l_k bar", y: "F bar", curves: [{ label: "F bar", colour: "#0072b2", points: series.map((s) => [s.l_k_bar, s.F_bar]), mark }] }) : null;
-  const h = series.length ? overlay($("#plot-h"), { title: "H bar against l_k bar", x: "l_k bar", y: "H bar", curves: [{ label: "H bar", colour: "#d55e00", points: series.map((s) => [s.l_k_bar, s.H_bar]), mark }] }) : null;
+  const label = (name) => (run, n) => n === 1 ? name : `${name}, ${run.stage + 1}. ${run.kind} (${run.direction})`;
+  const marks = (field, colour) => events.map((e) => ({ x: e.l_k_bar, y: e[field], kind: e.kind, colour }));
+  const f = series.length ? overlay($("#plot-f"), { title: "F bar against l_k bar", x: "l_k bar", y: "F bar",
+    curves: stageCurves(series, p, (s) => s.F_bar, "#0072b2", label("F bar")), events: marks("F_bar_before", "#0072b2") }) : null;
+  const h = series.length ? overlay($("#plot-h"), { title: "H bar against l_k bar", x: "l_k bar", y: "H bar",
+    curves: stageCurves(series, p, (s) => s.H_bar, "#d55e00", label("H bar")), events: marks("H_bar_before", "#d55e00") }) : null;
   if (!series.length) $("#plot-f").textContent = "No series yet.";
+  energies(series);
   const cols = ["l_k_bar", "l_c_over_L", "F_bar", "H_bar", "epsilon", "phi", "contacts", "max_penetration_over_h"];
   $("#series").innerHTML = `<thead><tr>${cols.map((k) => `<th scope="col">${k}</th>`).join("")}</tr></thead><tbody>` +
     series.filter((_, i) => i % Math.max(1, Math.ceil(series.length / 200)) === 0)
@@ -86,4 +112,29 @@ export async function casePage(main, id) {
   slider.oninput = show;
   $("#reset").onclick = () => view.reset();
   show();
+}
+
+/** The energies of eq. (6) over EI / h against time: braid and loop, and stretching, bending and twisting. */
+const ENERGIES = [
+  ["E_braid_bar", "braid", "#0072b2", []],
+  ["E_loop_bar", "loop", "#d55e00", []],
+  ["E_stretch_bar", "stretching", "#009e73", [2, 3]],
+  ["E_bend_bar", "bending", "#cc79a7", [2, 3]],
+  ["E_twist_bar", "twisting", "#e69f00", [2, 3]],
+];
+
+function energies(series) {
+  const el = $("#plot-e");
+  const present = ENERGIES.filter(([k]) => series.some((s) => typeof s[k] === "number"));
+  if (!series.length || !present.length) {
+    el.textContent = series.length ? "This result records no energies (computed before they were)." : "No series yet.";
+    return;
+  }
+  // Time, not l_k bar: a program that loosens or holds revisits the same l_k bar.
+  overlay(el, {
+    title: "Energies over EI / h against time (braid and loop solid, by energy dotted)",
+    x: "time (s)",
+    y: "E bar",
+    curves: present.map(([k, name, colour, dash]) => ({ label: name, colour, dash, points: series.map((s) => [s.time, s[k]]) })),
+  });
 }

@@ -141,17 +141,30 @@ async function presets() {
   }
 }
 
-/** The CaseParams schema of the OpenAPI document: name, type, default, description. */
+/**
+ * The CaseParams schema of the OpenAPI document: the parameters (name, type,
+ * default, description, `x-group`) in the table's order (`x-order`), and the
+ * groups with their titles in form order (`x-groups`).
+ */
 async function schema() {
   const doc = await get("/api/openapi.json");
   const s = doc.components.schemas.CaseParams;
-  return Object.entries(s.properties).map(([name, p]) => ({ name, ...p }));
+  const order = s["x-order"] || [];
+  const at = (name) => (order.includes(name) ? order.indexOf(name) : order.length);
+  const params = Object.entries(s.properties).map(([name, p]) => ({ name, ...p }))
+    .sort((a, b) => at(a.name) - at(b.name) || a.name.localeCompare(b.name));
+  const groups = s["x-groups"] || [...new Set(params.map((p) => p["x-group"]))].map((name) => ({ name, title: name }));
+  return { params, groups };
 }
 
-const SKIP = new Set(["initial_shape"]);
-/** The parameters a study varies first, in the paper's order; the rest follow alphabetically. */
-const FIRST = ["n", "h", "mu", "length", "nodes", "friction_law", "rolling", "gravity"];
-const rank = (name) => (FIRST.includes(name) ? FIRST.indexOf(name) : FIRST.length);
+/** Parameters the form sets otherwise: a start shape is a file's worth of points; the program has its editor. */
+const SKIP = new Set(["initial_shape", "loading"]);
+/** The group the form folds away under "advanced". */
+const ADVANCED = "solver";
+/** The rod's constants a named material sets. */
+const MATERIAL_FIELDS = ["youngs_modulus", "density", "poisson_ratio"];
+/** The grid axis that is not a parameter: a named material sets all three (server/src/spec.rs, MATERIAL_AXIS). */
+const MATERIAL_AXIS = "material";
 
 function kind(p) {
   const t = Array.isArray(p.type) ? p.type.filter((x) => x !== "null")[0] : p.type;
@@ -191,38 +204,191 @@ function value(p, text) {
   }
 }
 
+/** The first sentence of a description: the field's one-line help (the whole text is a click away). */
+const firstSentence = (text) => (text.match(/^.*?[.;](\s|$)/) || [text])[0].trim();
+
+/** One parameter's row: label (the full doc as its title), value, grid axis, a folded doc, its error. */
+function field(p) {
+  const k = kind(p);
+  const def = p.default === undefined || p.default === null ? "" : Array.isArray(p.default) ? p.default.join(", ") : String(p.default);
+  const doc = p.description || "";
+  const input = k === "boolean" || k === "enum"
+    ? `<select id="p-${p.name}" name="${p.name}"><option value="">default (${esc(def)})</option>${(p.enum || ["true", "false"]).map((v) => `<option>${esc(v)}</option>`).join("")}</select>`
+    : `<input id="p-${p.name}" name="${p.name}" inputmode="${k === "integer" || k === "number" ? "decimal" : "text"}" placeholder="${esc(def || "default")}">`;
+  return `<div class="field" data-param="${p.name}">
+    <label for="p-${p.name}" title="${esc(doc)}">${esc(p.name)}</label>${input}
+    <input id="g-${p.name}" class="grid" aria-label="${esc(p.name)} grid values" placeholder="grid: values or start:stop:step">
+    <details class="doc"><summary>${esc(firstSentence(doc))}</summary>${esc(doc)}</details>
+    <span class="field-error" data-for="${p.name}" role="status"></span></div>`;
+}
+
+/** The material picker: fills E, rho and nu from a named material (`GET /api/materials`); a grid over materials. */
+function materialPicker(materials) {
+  if (!materials.length) return "";
+  return `<div class="field material" data-param="${MATERIAL_AXIS}">
+    <label for="material" title="A named material sets youngs_modulus, density and poisson_ratio">material</label>
+    <select id="material"><option value="">custom (the values below)</option>${materials.map((m) =>
+      `<option value="${esc(m.name)}">${esc(m.name)}: E ${m.youngs_modulus.toExponential(2)} Pa, rho ${m.density}, nu ${m.poisson_ratio}</option>`).join("")}</select>
+    <input id="g-${MATERIAL_AXIS}" class="grid" aria-label="material grid values" placeholder="grid: ${esc(materials.map((m) => m.name).slice(0, 3).join(", "))}">
+    <span class="help" id="material-source">Pick one to fill E, rho and nu, or grid over names.</span>
+    <span class="field-error" data-for="${MATERIAL_AXIS}" role="status"></span></div>`;
+}
+
+/** The loading programs offered as starting points of the editor; null: the default one tightening. */
+export const PROGRAMS = {
+  tighten: { label: "tighten (default)", program: null },
+  hysteresis: { label: "tighten then loosen", program: [{ pull: {} }, { release: {} }] },
+  twist: { label: "rotate then pull", program: [{ rotate: { turns: 1, ends: "one" } }, { pull: {} }] },
+  soft: { label: "soft device", program: [{ soft: { stiffness_bar: 100, to_l_k_bar: 190 } }] },
+};
+
+/** Each stage's fields: name, kind (number, or a list of words), required, placeholder. */
+const STAGES = {
+  pull: [{ name: "to_l_k_bar", hint: "to the stopping rules" }],
+  release: [{ name: "to_l_k_bar", hint: "back to the start" }],
+  hold: [{ name: "seconds", required: true, hint: "s" }],
+  rotate: [{ name: "turns", required: true, hint: "turns" }, { name: "ends", words: ["one", "both"] }],
+  soft: [{ name: "stiffness_bar", required: true, hint: "k (EI / h^3)" }, { name: "to_l_k_bar", hint: "l_k bar" }],
+};
+const STAGE_DOC = {
+  pull: "tighten at pull_speed",
+  release: "loosen at pull_speed",
+  hold: "hold the clamps still",
+  rotate: "turn the clamps about the pull axis",
+  soft: "pull through springs (a soft device)",
+};
+
+/** The loading-program editor: a preset program, then stages to add, remove, reorder and edit. */
+class ProgramEditor {
+  constructor(root, onchange) {
+    this.root = root;
+    this.onchange = onchange;
+    this.stages = null;
+    root.innerHTML = `<div class="field program" data-param="loading">
+      <label for="program-preset" title="The stages the clamps go through after the knot has relaxed (docs/API.md, Loading programs)">loading</label>
+      <select id="program-preset">${Object.entries(PROGRAMS).map(([k, p]) => `<option value="${k}">${esc(p.label)}</option>`).join("")}<option value="custom" hidden>custom</option></select>
+      <span></span>
+      <span class="help">The loading program: stages run in order after the knot has relaxed. Empty targets take the stopping rules (a pull) or the start (a release).</span>
+      <span class="field-error" data-for="loading" role="status"></span></div>
+      <ol id="stages" class="stages" aria-label="loading program stages"></ol>
+      <p class="stage-add"><select id="stage-kind" aria-label="stage to add">${Object.keys(STAGES).map((k) => `<option value="${k}">${k}: ${esc(STAGE_DOC[k])}</option>`).join("")}</select>
+        <button type="button" id="stage-add">Add stage</button>
+        <code id="loading-json" class="program-json"></code></p>`;
+    $("#program-preset", root).onchange = (e) => this.preset(e.target.value);
+    $("#stage-add", root).onclick = () => {
+      const k = $("#stage-kind", root).value;
+      this.set([...(this.stages || [{ pull: {} }]), { [k]: k === "rotate" ? { turns: 1, ends: "one" } : k === "hold" ? { seconds: 1 } : k === "soft" ? { stiffness_bar: 100 } : {} }], "custom");
+    };
+    this.preset("tighten");
+  }
+
+  preset(name) {
+    const p = PROGRAMS[name];
+    if (p) this.set(p.program && structuredClone(p.program), name);
+  }
+
+  /** The program to submit: null for the default one tightening. */
+  program() {
+    return this.stages;
+  }
+
+  set(stages, presetName) {
+    this.stages = stages && stages.length ? stages : null;
+    $("#program-preset", this.root).value = presetName;
+    const list = $("#stages", this.root);
+    const shown = this.stages || [{ pull: {} }];
+    list.innerHTML = shown.map((stage, i) => {
+      const [k, body] = Object.entries(stage)[0];
+      const inputs = STAGES[k].map((f) => f.words
+        ? `<label>${f.name} <select data-stage="${i}" data-key="${f.name}">${f.words.map((w) => `<option${body[f.name] === w ? " selected" : ""}>${w}</option>`).join("")}</select></label>`
+        : `<label>${f.name} <input data-stage="${i}" data-key="${f.name}" inputmode="decimal" size="8" value="${body[f.name] ?? ""}" placeholder="${esc(f.hint)}"${f.required ? " required" : ""}></label>`).join(" ");
+      const fixed = !this.stages;
+      return `<li class="stage" data-kind="${k}"><strong>${i + 1}. ${k}</strong> <span class="hint">${esc(STAGE_DOC[k])}</span> ${inputs}
+        ${fixed ? "" : `<button type="button" data-up="${i}" aria-label="move stage ${i + 1} up"${i === 0 ? " disabled" : ""}>↑</button>
+        <button type="button" data-remove="${i}" aria-label="remove stage ${i + 1}">Remove</button>`}</li>`;
+    }).join("");
+    for (const e of list.querySelectorAll("[data-stage]")) {
+      e.oninput = e.onchange = (ev) => {
+        ev.stopPropagation();
+        this.edit(Number(e.dataset.stage), e.dataset.key, e.value);
+      };
+    }
+    for (const b of list.querySelectorAll("[data-remove]")) {
+      b.onclick = () => this.set(this.stages.filter((_, i) => i !== Number(b.dataset.remove)), "custom");
+    }
+    for (const b of list.querySelectorAll("[data-up]")) {
+      b.onclick = () => {
+        const i = Number(b.dataset.up);
+        const s = this.stages.slice();
+        [s[i - 1], s[i]] = [s[i], s[i - 1]];
+        this.set(s, "custom");
+      };
+    }
+    this.show();
+  }
+
+  edit(i, key, text) {
+    const stages = structuredClone(this.stages || [{ pull: {} }]);
+    const body = Object.values(stages[i])[0];
+    const t = text.trim();
+    if (!t) delete body[key];
+    else body[key] = STAGES[Object.keys(stages[i])[0]].find((f) => f.name === key).words ? t : Number(t);
+    this.stages = stages;
+    $("#program-preset", this.root).value = "custom";
+    this.show();
+  }
+
+  show() {
+    $("#loading-json", this.root).textContent = this.stages ? JSON.stringify(this.stages) : "null: one tightening";
+    this.onchange();
+  }
+}
+
 async function form() {
-  const params = (await schema())
-    .filter((p) => !SKIP.has(p.name))
-    .sort((a, b) => rank(a.name) - rank(b.name) || a.name.localeCompare(b.name));
-  $("#params").innerHTML = params.map((p) => {
-    const k = kind(p);
-    const def = p.default === undefined || p.default === null ? "" : Array.isArray(p.default) ? p.default.join(", ") : String(p.default);
-    const input = k === "boolean" || k === "enum"
-      ? `<select id="p-${p.name}" name="${p.name}"><option value="">default (${esc(def)})</option>${(p.enum || ["true", "false"]).map((v) => `<option>${esc(v)}</option>`).join("")}</select>`
-      : `<input id="p-${p.name}" name="${p.name}" inputmode="${k === "integer" || k === "number" ? "decimal" : "text"}" placeholder="${esc(def || "default")}">`;
-    return `<div class="field">
-      <label for="p-${p.name}">${esc(p.name)}</label>${input}
-      <input id="g-${p.name}" class="grid" aria-label="${esc(p.name)} grid values" placeholder="grid: values or start:stop:step">
-      <span class="help">${esc(p.description || "")}</span>
-      <span class="field-error" data-for="${p.name}" role="status"></span></div>`;
-  }).join("");
+  const [{ params: all, groups }, materials] = await Promise.all([schema(), get("/api/materials").catch(() => [])]);
+  const params = all.filter((p) => !SKIP.has(p.name));
+  const rows = (g) => params.filter((p) => p["x-group"] === g).map(field).join("");
+  const grouped = groups.map((g) => {
+    const extra = (g.name === "rod" ? materialPicker(materials) : "") + rows(g.name) +
+      (g.name === "loading" ? `<div id="program"></div>` : "");
+    const set = `<fieldset class="group" data-group="${esc(g.name)}"><legend>${esc(g.title)}</legend>${extra}</fieldset>`;
+    return g.name === ADVANCED
+      ? `<details class="advanced" id="advanced"><summary>${esc(g.title)}: numerical options, defaults that suit most cases</summary>${set}</details>`
+      : set;
+  });
+  const orphans = params.filter((p) => !groups.some((g) => g.name === p["x-group"]));
+  $("#params").innerHTML = grouped.join("") +
+    (orphans.length ? `<fieldset class="group" data-group="other"><legend>Other</legend>${orphans.map(field).join("")}</fieldset>` : "");
   const f = $("#custom");
+  const picker = $("#material");
+  if (picker) {
+    picker.onchange = () => {
+      const m = materials.find((x) => x.name === picker.value);
+      for (const name of MATERIAL_FIELDS) {
+        const input = $(`#p-${name}`);
+        if (input) input.value = m ? String(m[name]) : "";
+      }
+      $("#material-source").textContent = m ? m.source : "Pick one to fill E, rho and nu, or grid over names.";
+      f.dispatchEvent(new Event("input"));
+    };
+  }
+  const axes = [...params.map((p) => p.name), ...(picker ? [MATERIAL_AXIS] : [])];
   const count = () => {
     let n = 1;
     let bad = false;
-    for (const p of params) {
+    for (const name of axes) {
       try {
-        const a = axis($(`#g-${p.name}`).value);
+        const a = axis($(`#g-${name}`).value);
         if (a) n *= a.length;
-        setError(p.name, "");
+        setError(name, "");
       } catch (e) {
-        setError(p.name, "grid: " + e.message);
+        setError(name, "grid: " + e.message);
         bad = true;
       }
     }
     $("#count").textContent = bad ? "fix the grid" : cases(n);
   };
+  const program = new ProgramEditor($("#program"), count);
   f.oninput = count;
   count();
   f.onsubmit = async (ev) => {
@@ -233,9 +399,13 @@ async function form() {
     for (const p of params) {
       const v = value(p, $(`#p-${p.name}`).value);
       if (v !== undefined) base[p.name] = v;
-      const a = axis($(`#g-${p.name}`).value);
-      if (a) grid[p.name] = a;
     }
+    for (const name of axes) {
+      const a = axis($(`#g-${name}`).value);
+      if (a) grid[name] = a;
+    }
+    const loading = program.program();
+    if (loading) base.loading = loading;
     const body = { base, grid };
     if (certify()) body.certify = true;
     const name = $("#sweep-name").value.trim();
@@ -254,7 +424,11 @@ async function form() {
         setError(document.querySelector(`.field-error[data-for="${target}"]`) ? target : "form", `${fe.field}: ${fe.reason}`);
       }
       const first = f.querySelector(".field-error:not(:empty)");
-      if (first) first.closest(".field")?.querySelector("input,select")?.focus();
+      if (first) {
+        const details = first.closest("details.advanced");
+        if (details) details.open = true;
+        first.closest(".field")?.querySelector("input,select")?.focus();
+      }
     }
   };
 }

@@ -5,6 +5,7 @@
 import { api, get, limits } from "./api.js";
 import { esc, fmt, duration, when, notice, colour, download, $ } from "./util.js";
 import { overlay, scatter } from "./plot.js";
+import { stageCurves } from "./stages.js";
 
 /** Cases overlaid at most (the first ones in grid order). */
 const MAX_CURVES = 40;
@@ -16,7 +17,7 @@ export async function sweepPage(main, id) {
     <h1 id="title">Sweep #${esc(id)}</h1>
     <div id="summary" aria-live="polite">Loading…</div>
     <div class="actions" id="actions"></div>
-    <section aria-labelledby="curves-h"><h2 id="curves-h">Tightening curves</h2>
+    <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
       <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div></section>
     <section aria-labelledby="phase-h"><h2 id="phase-h">Phase diagram</h2><div id="phase" class="plot"></div>
       <p class="hint" id="phase-note"></p></section>
@@ -103,21 +104,25 @@ async function refresh(state) {
   const finished = cases.slice(0, MAX_CURVES).filter((c) => c.progress >= 1 || c.wall_time);
   await Promise.all(finished.filter((c) => !state.seriesOf.has(c.case_id)).map(async (c) => {
     const detail = await get(`/api/cases/${c.case_id}`);
-    state.seriesOf.set(c.case_id, detail.series || []);
+    state.seriesOf.set(c.case_id, { series: detail.series || [], params: detail.params });
   }));
   const key = finished.map((c) => c.case_id).join(",");
   if (key !== state.drawn) {
     state.drawn = key;
     const label = (c) => Object.entries(c.params).map(([k, v]) => `${k} = ${v}`).join(", ") || `case ${c.case_id}`;
-    const curves = (pick) => finished.map((c) => ({
-      label: label(c),
-      colour: colour(cases.indexOf(c)),
-      points: (state.seriesOf.get(c.case_id) || []).map((s) => [s.l_k_bar, pick(s)]),
-      mark: c.inversion ? c.inversion.l_k_bar : null,
-    }));
+    // One curve per stage of each case's program, in the case's colour: tightening solid, loosening dashed.
+    const curves = (pick) => finished.flatMap((c) => {
+      const { series, params } = state.seriesOf.get(c.case_id) || { series: [], params: null };
+      const drawn = stageCurves(series, params, pick, colour(cases.indexOf(c)),
+        (run, n) => (n === 1 ? label(c) : `${label(c)}, ${run.stage + 1}. ${run.kind}`));
+      if (drawn.length) drawn[0].mark = c.inversion ? c.inversion.l_k_bar : null;
+      return drawn;
+    });
     if (finished.length) {
-      overlay($("#plot-f"), { title: "F bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "F bar", curves: curves((s) => s.F_bar) });
-      overlay($("#plot-h"), { title: "H bar against l_k bar (dashed: inversion)", x: "l_k bar", y: "H bar", curves: curves((s) => s.H_bar) });
+      const loosens = finished.some((c) => (state.seriesOf.get(c.case_id)?.params?.loading || []).some((st) => "release" in st));
+      const styles = loosens ? "vertical dashes: inversion; dashed curves: loosening" : "dashed: inversion";
+      overlay($("#plot-f"), { title: `F bar against l_k bar (${styles})`, x: "l_k bar", y: "F bar", curves: curves((s) => s.F_bar) });
+      overlay($("#plot-h"), { title: `H bar against l_k bar (${styles})`, x: "l_k bar", y: "H bar", curves: curves((s) => s.H_bar) });
     } else {
       $("#plot-f").textContent = "Curves appear as cases finish.";
     }
@@ -141,6 +146,12 @@ async function refresh(state) {
     const errors = inverted.filter((p) => settled(p) && p.uncertainty.absolute !== null)
       .map((p) => [...at(p), p.uncertainty.absolute]);
     const unconverged = inverted.filter((p) => settled(p) && p.uncertainty.converged === false).map(at);
+    // A program that loosens: the second fold (the flip back) and the band of hysteresis between the folds.
+    const xOf = (p) => Number(p.params[axisName]) * scale;
+    const flipped = pd.points.filter((p) => p.hysteresis);
+    const flips = flipped.map((p) => [xOf(p), p.hysteresis.flip_back_l_k_bar]);
+    const band = flipped.map((p) => [xOf(p), p.hysteresis.inversion_l_k_bar, p.hysteresis.flip_back_l_k_bar]);
+    const unsteady = inverted.filter((p) => p.quasi_static && p.quasi_static.holds === false).map(at);
     scatter($("#phase"), {
       title: `critical l_k bar against ${axisName}${axisName === "h" ? " (mm)" : ""}`,
       x: axisName === "h" ? "h (mm)" : axisName,
@@ -150,6 +161,9 @@ async function refresh(state) {
       reference,
       errors,
       unconverged,
+      flips,
+      band,
+      unsteady,
     });
     const none = pd.points.filter((p) => !p.inversion).map((p) => `${axisName} = ${p.params[axisName]}: ${p.reason || p.status}`);
     const held = inverted.filter(rising).map((p) => `${axisName} = ${p.params[axisName]} (F bar × ${fmt(p.inversion.F_bar_after / p.inversion.F_bar_before, 3)}, kinetic energy × ${fmt(p.inversion.kinetic_energy_ratio, 1)})`);
@@ -157,8 +171,13 @@ async function refresh(state) {
     const friction = axisName === "mu"
       ? "Paper Fig. 11: the loop inverts earlier, at a larger l_k bar, as mu grows. The default model (friction at the centre lines, the paper's start twist) gives that trend with a clean snap at every mu; with rolling = true the high-friction points lose their snap (docs/FIDELITY.md)."
       : "";
+    const widths = flipped.map((p) => `${axisName} = ${p.params[axisName]}: ${fmt(p.hysteresis.width, 1)}`);
+    const fast = pd.points.filter((p) => p.quasi_static && p.quasi_static.holds === false)
+      .map((p) => `${axisName} = ${p.params[axisName]} (kinetic / elastic ${fmt(p.quasi_static.kinetic_ratio, 4)} > ${fmt(p.quasi_static.limit, 4)})`);
     $("#phase-note").textContent = [
       friction,
+      flips.length ? `Hysteresis (shaded between the tightening inversion and the flip back while loosening): width in l_k bar ${widths.join("; ")}.` : "",
+      fast.length ? `Not quasi-static (ringed orange: the pull was too fast for the rod, its curves carry inertia): ${fast.join("; ")}.` : "",
       certification(pd, served, (p) => `${axisName} = ${p.params[axisName]}`),
       none.length ? "Without an inversion: " + none.join("; ") + "." : "",
       held.length ? "F bar does not fall through the event at " + held.join("; ") +
@@ -166,7 +185,9 @@ async function refresh(state) {
     ].filter(Boolean).join(" ");
   } else {
     const p = pd.points[0];
-    $("#phase").textContent = p && p.inversion ? `Inversion at l_k bar ${fmt(p.inversion.l_k_bar)}${plusMinus(p)}` : "A single case: no axis to plot.";
+    $("#phase").textContent = p && p.inversion ? `Inversion at l_k bar ${fmt(p.inversion.l_k_bar)}${plusMinus(p)}` +
+      (p.hysteresis ? `; flip back at ${fmt(p.hysteresis.flip_back_l_k_bar)} (hysteresis width ${fmt(p.hysteresis.width)})` : "") +
+      (p.quasi_static && p.quasi_static.holds === false ? "; not quasi-static" : "") : "A single case: no axis to plot.";
     $("#phase-note").textContent = certification(pd, served, () => "the case");
   }
 }

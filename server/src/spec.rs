@@ -546,7 +546,7 @@ mod tests {
             ["grid"],
             "8 cases with the twins"
         );
-        let finest = serde_json::json!({"base": {"dt": 1.5e-6}, "certify": true});
+        let finest = serde_json::json!({"base": {"dt": 1.5e-9}, "certify": true});
         let errors = expand(&spec(finest), &l).unwrap_err();
         assert_eq!(errors[0].field, "certify", "{errors:?}");
         assert!(errors[0].reason.contains("dt"), "{errors:?}");

@@ -1248,6 +1248,7 @@ async fn queue_figures() {
         preset: None,
         spec: json!({}),
         varied: vec!["mu".to_string()],
+        snapshots: knotsweep_worker::store::SnapshotChoice::All,
         cases,
         idempotency: None,
     };

@@ -504,6 +504,7 @@ fn new_sweep(spec: &SweepSpec, raw: &Value, expanded: Expanded, idempotency_key:
         preset: expanded.preset,
         spec: serde_json::to_value(spec).expect("spec serialises"),
         varied: expanded.varied,
+        snapshots: spec.snapshots.unwrap_or_default(),
         cases: with_twins(expanded.cases, expanded.twins),
         idempotency: idempotency_key.map(|key| Idempotency {
             key: key.to_string(),

@@ -2,6 +2,7 @@
 //! expansion into validated cases. The parameters are `solver::case::CaseParams`
 //! (the one definition): the base and every grid value are applied to it by
 //! field name, so any field can be set or varied.
+use knotsweep_worker::store::SnapshotChoice;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use solver::case::CaseParams;
@@ -73,6 +74,12 @@ pub struct SweepSpec {
     /// inversion its numerical uncertainty. About 3 times the cost.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub certify: Option<bool>,
+    /// Which snapshots the results keep: `all` (the default), `events` (those
+    /// around each inversion or flip back) or `none`. The cases and their
+    /// keys are the same whatever is kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(schema_with = crate::openapi::snapshot_choice)]
+    pub snapshots: Option<SnapshotChoice>,
 }
 
 /// A field and why its value was refused.

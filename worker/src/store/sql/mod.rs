@@ -82,6 +82,19 @@ impl<B: Backend> SqlStore<B> {
     pub fn pool(&self) -> &AnyPool {
         &self.pool
     }
+
+    /// The series or snapshots of case `id`'s result as JSON ([`served_json`],
+    /// decoded on the blocking pool); `None` before the result.
+    async fn served(&self, id: i64, what: Packed) -> StoreResult<Option<String>> {
+        let sql = "SELECT series, series_packed, snapshots, snapshots_packed FROM results WHERE case_id = $1";
+        let Some(row) = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await? else {
+            return Ok(None);
+        };
+        tokio::task::spawn_blocking(move || served_json(&row, what))
+            .await
+            .map_err(|e| StoreError::Corrupt(format!("decoding the result of case {id}: {e}")))?
+            .map(Some)
+    }
 }
 
 #[async_trait]
@@ -166,15 +179,11 @@ impl<B: Backend> Store for SqlStore<B> {
     }
 
     async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>> {
-        let sql = "SELECT series FROM results WHERE case_id = $1";
-        let row = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await?;
-        row.map(|r| r.text("series")).transpose()
+        self.served(id, Packed::Series).await
     }
 
     async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>> {
-        let sql = "SELECT snapshots FROM results WHERE case_id = $1";
-        let row = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await?;
-        row.map(|r| r.text("snapshots")).transpose()
+        self.served(id, Packed::Snapshots).await
     }
 
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {

@@ -232,6 +232,11 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     let params = &doc["components"]["schemas"]["CaseParams"]["properties"];
     assert_eq!(params["h"]["default"], 1.6e-3);
     assert!(doc["components"]["schemas"].get("PhaseDiagram").is_some());
+    let snapshots = &doc["components"]["schemas"]["SweepSpec"]["properties"]["snapshots"];
+    assert_eq!(
+        (&snapshots["enum"], &snapshots["default"]),
+        (&json!(["all", "events", "none"]), &json!("all"))
+    );
     let (status, swagger) = get_text(&c, &format!("{url}/api/docs/")).await;
     assert_eq!(status, StatusCode::OK);
     assert!(swagger.contains("swagger-ui"), "{swagger}");
@@ -841,6 +846,11 @@ async fn bad_input_gets_a_4xx_with_the_field_and_the_reason() {
             "base.mu",
         ),
         (r#"{"base": 3}"#.into(), StatusCode::UNPROCESSABLE_ENTITY, "base"),
+        (
+            r#"{"snapshots": "some"}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "snapshots",
+        ),
         (
             r#"{"grid": {"h": [0.001, 0.05]}}"#.into(),
             StatusCode::UNPROCESSABLE_ENTITY,

@@ -514,6 +514,37 @@ mod tests {
         r.unwrap_err().into_iter().map(|e| e.field).collect()
     }
 
+    /// `snapshots` takes its three words (`all` when left out), names
+    /// itself when refused, and leaves the cases and their keys alone.
+    #[test]
+    fn the_snapshot_choice_is_read_and_changes_no_case() {
+        let keys = |json: Value| {
+            let (spec, _) = crate::Core::parse_spec(json.to_string().as_bytes()).unwrap();
+            let expanded = expand(&spec, &Limits::default()).unwrap();
+            let keys: Vec<String> = (expanded.cases.iter())
+                .map(|c| knotsweep_worker::case_key(&c.params))
+                .collect();
+            (spec.snapshots, keys)
+        };
+        let (choice, all) = keys(serde_json::json!({"preset": "hysteresis"}));
+        assert_eq!(choice, None);
+        for (word, expected) in [
+            ("all", SnapshotChoice::All),
+            ("events", SnapshotChoice::Events),
+            ("none", SnapshotChoice::None),
+        ] {
+            let (choice, these) = keys(serde_json::json!({"preset": "hysteresis", "snapshots": word}));
+            assert_eq!((choice, &these), (Some(expected), &all), "{word}");
+        }
+        let refused = crate::Core::parse_spec(br#"{"snapshots": "some"}"#).unwrap_err();
+        match refused {
+            crate::error::CoreError::Invalid(fields) => {
+                assert_eq!(fields[0].field, "snapshots", "{fields:?}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
     #[test]
     fn certify_adds_a_refined_twin_per_case_and_counts_it_against_the_limit() {
         let l = Limits::default();

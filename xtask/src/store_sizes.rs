@@ -6,11 +6,12 @@
 //!   columns) and packed (`knotsweep_worker::store::codec`), for each
 //!   snapshot choice;
 //! - `--database h.db` (a SQLite store, e.g. after `knotsweep sweep`): its
-//!   files (`h.db`, `h.db-wal`, `h.db-shm`), its results and the bytes per
-//!   result.
+//!   files (`h.db`, `h.db-wal`, `h.db-shm`) and, per packed result, the
+//!   files' bytes, the packed series and snapshots' and what they would take
+//!   as JSON text.
 use anyhow::{Context, Result, bail};
 use knotsweep_worker::store::SnapshotChoice;
-use knotsweep_worker::store::codec::{pack_series, pack_snapshots};
+use knotsweep_worker::store::codec::{pack_series, pack_snapshots, unpack_series, unpack_snapshots};
 use solver::measurements::Sample;
 use solver::snapshot::Snapshot;
 use std::fmt::Write;
@@ -79,26 +80,32 @@ fn database_sizes(path: &Path) -> Result<String> {
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
-    let (results, packed) = runtime.block_on(async {
+    let rows: Vec<(Vec<u8>, Vec<u8>)> = runtime.block_on(async {
         sqlx::any::install_default_drivers();
         let pool = sqlx::AnyPool::connect(&format!("{url}?mode=ro")).await?;
-        let row: (i64, i64) = sqlx::query_as(
-            "SELECT COUNT(*), CAST(COALESCE(SUM(LENGTH(series_packed) + LENGTH(snapshots_packed)), 0) AS INTEGER) \
-             FROM results",
+        let rows = sqlx::query_as(
+            "SELECT series_packed, snapshots_packed FROM results WHERE series_packed IS NOT NULL ORDER BY case_id",
         )
-        .fetch_one(&pool)
+        .fetch_all(&pool)
         .await?;
         pool.close().await;
-        anyhow::Ok(row)
+        anyhow::Ok(rows)
     })?;
-    writeln!(out, "together: {total} B over {results} results")?;
-    if results > 0 {
-        let n = results as u64;
+    let (mut packed, mut json) = (0, 0);
+    for (series, snapshots) in &rows {
+        packed += series.len() + snapshots.len();
+        json += serde_json::to_string(&unpack_series(series)?)?.len();
+        json += serde_json::to_string(&unpack_snapshots(snapshots)?)?.len();
+    }
+    writeln!(out, "together: {total} B over {} packed results", rows.len())?;
+    if !rows.is_empty() {
+        let kb = |bytes: f64| bytes / rows.len() as f64 / 1000.0;
         writeln!(
             out,
-            "per result: {:.1} kB of files, {:.1} kB of packed series and snapshots",
-            total as f64 / n as f64 / 1000.0,
-            packed as f64 / n as f64 / 1000.0
+            "per result: {:.1} kB of files; {:.1} kB of packed series and snapshots, {:.1} kB as JSON text",
+            kb(total as f64),
+            kb(packed as f64),
+            kb(json as f64)
         )?;
     }
     Ok(out)

@@ -194,10 +194,7 @@ pub(crate) fn packed_snapshots(snapshots: &[Snapshot], choice: SnapshotChoice) -
 /// decoded and written as JSON, or the JSON text of a row stored before the
 /// packed columns, as stored.
 pub(crate) fn served_json(row: &AnyRow, what: Packed) -> StoreResult<String> {
-    let (text, packed) = match what {
-        Packed::Series => ("series", "series_packed"),
-        Packed::Snapshots => ("snapshots", "snapshots_packed"),
-    };
+    let (text, packed) = what.columns();
     let corrupt = |e: CodecError| StoreError::Corrupt(format!("{text}: {e}"));
     match (row.bytes_or_null(packed)?, row.text_or_null(text)?) {
         (Some(bytes), _) => Ok(match what {
@@ -215,4 +212,14 @@ pub(crate) fn served_json(row: &AnyRow, what: Packed) -> StoreResult<String> {
 pub(crate) enum Packed {
     Series,
     Snapshots,
+}
+
+impl Packed {
+    /// The JSON text column (rows stored before packing) and the packed one.
+    pub(crate) fn columns(self) -> (&'static str, &'static str) {
+        match self {
+            Self::Series => ("series", "series_packed"),
+            Self::Snapshots => ("snapshots", "snapshots_packed"),
+        }
+    }
 }

@@ -1,8 +1,11 @@
 //! The packed body: typed arrays, each byte-shuffled (the bytes of its
 //! words grouped by significance, so that the slowly varying sign and
 //! exponent bytes sit together), appended in a fixed order and deflated as
-//! one stream behind a format byte. Nothing in the body says how long an
-//! array is: the reader knows from what it read before.
+//! one stream behind a format byte. An array written `_along` holds the
+//! differences of its values' bit patterns from one to the next (lossless;
+//! their high bytes are zero where the values vary smoothly). Nothing in the
+//! body says how long an array is: the reader knows from what it read
+//! before.
 use super::CodecError;
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
@@ -24,10 +27,6 @@ impl Packer {
         self.shuffled(values.into_iter().map(u64::to_le_bytes));
     }
 
-    pub(super) fn f16s(&mut self, values: impl IntoIterator<Item = half::f16>) {
-        self.shuffled(values.into_iter().map(half::f16::to_le_bytes));
-    }
-
     pub(super) fn f32s(&mut self, values: impl IntoIterator<Item = f32>) {
         self.shuffled(values.into_iter().map(f32::to_le_bytes));
     }
@@ -38,6 +37,29 @@ impl Packer {
 
     pub(super) fn bytes(&mut self, bytes: &[u8]) {
         self.body.extend_from_slice(bytes);
+    }
+
+    /// f16 values as the differences of their bit patterns along the array
+    /// (lossless; small where the values vary smoothly).
+    pub(super) fn f16s_along(&mut self, values: impl IntoIterator<Item = half::f16>) {
+        let mut previous = 0u16;
+        self.shuffled(values.into_iter().map(|v| {
+            let code = v.to_bits();
+            let delta = code.wrapping_sub(previous);
+            previous = code;
+            delta.to_le_bytes()
+        }));
+    }
+
+    /// f32 values likewise.
+    pub(super) fn f32s_along(&mut self, values: impl IntoIterator<Item = f32>) {
+        let mut previous = 0u32;
+        self.shuffled(values.into_iter().map(|v| {
+            let code = v.to_bits();
+            let delta = code.wrapping_sub(previous);
+            previous = code;
+            delta.to_le_bytes()
+        }));
     }
 
     /// Byte `b` of every word, for b = 0 (least significant) upwards.
@@ -85,20 +107,34 @@ impl Unpacker {
         Ok(self.unshuffled(n)?.into_iter().map(u64::from_le_bytes).collect())
     }
 
-    pub(super) fn f16s(&mut self, n: usize) -> Result<Vec<half::f16>, CodecError> {
-        Ok(self
-            .unshuffled(n)?
-            .into_iter()
-            .map(half::f16::from_le_bytes)
-            .collect())
-    }
-
     pub(super) fn f32s(&mut self, n: usize) -> Result<Vec<f32>, CodecError> {
         Ok(self.unshuffled(n)?.into_iter().map(f32::from_le_bytes).collect())
     }
 
     pub(super) fn f64s(&mut self, n: usize) -> Result<Vec<f64>, CodecError> {
         Ok(self.unshuffled(n)?.into_iter().map(f64::from_le_bytes).collect())
+    }
+
+    /// `n` values [`Packer::f16s_along`] wrote.
+    pub(super) fn f16s_along(&mut self, n: usize) -> Result<Vec<half::f16>, CodecError> {
+        let mut code = 0u16;
+        Ok((self.unshuffled(n)?.into_iter())
+            .map(|d| {
+                code = code.wrapping_add(u16::from_le_bytes(d));
+                half::f16::from_bits(code)
+            })
+            .collect())
+    }
+
+    /// `n` values [`Packer::f32s_along`] wrote.
+    pub(super) fn f32s_along(&mut self, n: usize) -> Result<Vec<f32>, CodecError> {
+        let mut code = 0u32;
+        Ok((self.unshuffled(n)?.into_iter())
+            .map(|d| {
+                code = code.wrapping_add(u32::from_le_bytes(d));
+                f32::from_bits(code)
+            })
+            .collect())
     }
 
     pub(super) fn bytes(&mut self, n: usize) -> Result<&[u8], CodecError> {
@@ -137,13 +173,18 @@ mod tests {
         p.u32s([1, 2, 3]);
         p.bytes(b"label");
         p.f64s([0.1, -2.5]);
-        p.f16s([half::f16::from_f32(0.5)]);
+        p.f16s_along([0.5, 0.25, -1.0].map(half::f16::from_f32));
+        p.f32s_along([1e-3, 2e-3, -7.5]);
         let packed = p.finish(7);
         let mut u = Unpacker::new(&packed, 7).unwrap();
         assert_eq!(u.u32s(3).unwrap(), [1, 2, 3]);
         assert_eq!(u.bytes(5).unwrap(), b"label");
         assert_eq!(u.f64s(2).unwrap(), [0.1, -2.5]);
-        assert_eq!(u.f16s(1).unwrap(), [half::f16::from_f32(0.5)]);
+        assert_eq!(
+            u.f16s_along(3).unwrap(),
+            [0.5, 0.25, -1.0].map(half::f16::from_f32)
+        );
+        assert_eq!(u.f32s_along(3).unwrap(), [1e-3, 2e-3, -7.5]);
         u.finish().unwrap();
     }
 

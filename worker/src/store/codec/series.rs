@@ -1,7 +1,7 @@
 //! A series, losslessly: column by column in [`COLUMNS`] order, every value
-//! a 64-bit word (a real's IEEE bits, a count as an integer) XORed with the
-//! column's previous word, so that a slowly varying column leaves its sign
-//! and exponent bytes zero, then byte-shuffled and deflated.
+//! a 64-bit word (a real's IEEE bits, a count as an integer) less the
+//! column's previous word (wrapping), so that a slowly varying column leaves
+//! its high bytes zero, then byte-shuffled and deflated.
 use super::CodecError;
 use super::planes::{Packer, Unpacker};
 use solver::measurements::{COLUMNS, Column, Sample};
@@ -52,10 +52,10 @@ pub fn pack_series(series: &[Sample]) -> Vec<u8> {
     let mut p = Packer::default();
     p.u64s([series.len() as u64]);
     for (_, column) in &COLUMNS {
-        let mut previous = 0;
+        let mut previous = 0u64;
         p.u64s(series.iter().map(|s| {
             let w = word(column, s);
-            let delta = w ^ previous;
+            let delta = w.wrapping_sub(previous);
             previous = w;
             delta
         }));
@@ -69,13 +69,13 @@ pub fn unpack_series(packed: &[u8]) -> Result<Vec<Sample>, CodecError> {
     let n = usize::try_from(u.u64s(1)?[0]).map_err(|_| CodecError::Truncated)?;
     let mut series = Vec::new();
     for (c, set) in SETTERS.iter().enumerate() {
-        let mut previous = 0;
+        let mut previous = 0u64;
         let words = u.u64s(n)?;
         if c == 0 {
             series = vec![Sample::default(); n];
         }
         for (s, delta) in series.iter_mut().zip(words) {
-            previous ^= delta;
+            previous = previous.wrapping_add(delta);
             set(s, previous);
         }
     }

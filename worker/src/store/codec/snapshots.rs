@@ -1,5 +1,6 @@
 //! Snapshots, compactly, field by field across the snapshots (each array
-//! byte-shuffled, all deflated together):
+//! byte-shuffled, all deflated together; the per-node arrays as differences
+//! along the rod, losslessly, `planes`):
 //!
 //! | field | stored as | comes back within |
 //! | --- | --- | --- |
@@ -46,7 +47,7 @@ pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
             .map(|(x, r)| std::array::from_fn(|k| (x[k] - r[k]) as f32))
             .collect();
         for k in 0..3 {
-            p.f32s(displacements.iter().map(|d| d[k]));
+            p.f32s_along(displacements.iter().map(|d| d[k]));
         }
         previous = displaced(&reference, &displacements);
     }
@@ -98,7 +99,7 @@ pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
     let mut previous: &[[f64; 3]] = &[];
     for &len in &point_len {
         let reference = reference(previous, len);
-        let [x, y, z] = [u.f32s(len)?, u.f32s(len)?, u.f32s(len)?];
+        let [x, y, z] = [u.f32s_along(len)?, u.f32s_along(len)?, u.f32s_along(len)?];
         let displacements: Vec<[f32; 3]> = (0..len).map(|i| [x[i], y[i], z[i]]).collect();
         points.push(displaced(&reference, &displacements));
         previous = points.last().expect("just pushed");
@@ -175,13 +176,13 @@ fn scale_of(values: &[f32]) -> f32 {
 fn scaled(p: &mut Packer, values: &[f32]) {
     let scale = scale_of(values);
     p.f32s([scale]);
-    p.f16s(values.iter().map(|v| f16::from_f32(v / scale)));
+    p.f16s_along(values.iter().map(|v| f16::from_f32(v / scale)));
 }
 
 /// `n` values [`scaled`] wrote.
 fn unscaled(u: &mut Unpacker, n: usize) -> Result<Vec<f32>, CodecError> {
     let scale = u.f32s(1)?[0];
-    Ok(u.f16s(n)?.into_iter().map(|v| v.to_f32() * scale).collect())
+    Ok(u.f16s_along(n)?.into_iter().map(|v| v.to_f32() * scale).collect())
 }
 
 #[cfg(test)]

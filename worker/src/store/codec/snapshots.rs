@@ -333,7 +333,7 @@ mod tests {
             contacts: Vec::new(),
         };
         let good = pack_snapshots(std::slice::from_ref(&shot));
-        assert_eq!(unpack_snapshots(&good).unwrap(), [shot.clone()]);
+        assert_eq!(unpack_snapshots(&good).unwrap(), [shot]);
         let mut p = Packer::default();
         p.u32s([1]);
         for len in [2, 0, 0, 0, 0, 0] {

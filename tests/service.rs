@@ -249,7 +249,10 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         .iter()
         .map(|p| p["name"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["fig7", "fig9", "fig11", "hysteresis", "twist", "materials"]);
+    assert_eq!(
+        names,
+        ["fig7", "fig9", "fig11", "hysteresis", "twist", "materials"]
+    );
     assert_eq!(presets[1]["grid"]["n"], json!([1, 2, 3, 4, 5]));
     assert_eq!(presets[2]["base_params"]["h"], 3.4e-3);
 

@@ -93,6 +93,10 @@ pub fn snapshot_choice() -> Schema {
     let words = SnapshotChoice::ALL.map(SnapshotChoice::as_str);
     ObjectBuilder::new()
         .schema_type(SchemaType::Type(Type::String))
+        .description(Some(
+            "Which snapshots the results keep: all, events (those around each inversion or flip back) or none. \
+             The cases and their keys are the same whatever is kept.",
+        ))
         .enum_values(Some(words))
         .default(Some(Value::from(SnapshotChoice::default().as_str())))
         .into()

@@ -5,10 +5,11 @@
 //! interruption resumes the sweep (finished cases are kept) instead of
 //! starting over.
 use anyhow::{Context, Result, bail};
+use clap::builder::PossibleValuesParser;
 use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::views::SweepStatus;
 use knotsweep_server::{Core, Limits};
-use knotsweep_worker::store::{CaseState, SweepAction, SweepState};
+use knotsweep_worker::store::{CaseState, SnapshotChoice, SweepAction, SweepState};
 use knotsweep_worker::{PoolConfig, WorkerPool};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -35,6 +36,10 @@ pub struct Args {
     /// halved) and give each inversion its numerical uncertainty (about 3x the cost).
     #[arg(long)]
     certify: bool,
+    /// Which snapshots the results keep: all, events (those around each
+    /// inversion or flip back) or none [default: the specification's, else all].
+    #[arg(long, value_parser = PossibleValuesParser::new(SnapshotChoice::ALL.map(SnapshotChoice::as_str)))]
+    snapshots: Option<String>,
 }
 
 fn build_spec(args: &Args) -> Result<Value> {
@@ -52,6 +57,9 @@ fn build_spec(args: &Args) -> Result<Value> {
     };
     if args.certify {
         object.insert("certify".to_string(), Value::Bool(true));
+    }
+    if let Some(choice) = &args.snapshots {
+        object.insert("snapshots".to_string(), Value::String(choice.clone()));
     }
     for assignment in &args.set {
         let Some((name, value)) = assignment.split_once('=') else {

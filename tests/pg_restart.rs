@@ -10,7 +10,8 @@ mod common;
 
 use common::missing;
 use knotsweep_worker::store::{
-    CaseState, Claim, CreateOutcome, Heartbeat, NewCase, NewSweep, Store, StoreOptions, open_store,
+    CaseState, Claim, CreateOutcome, Heartbeat, NewCase, NewSweep, SnapshotChoice, Store, StoreOptions,
+    open_store,
 };
 use solver::case::CaseParams;
 use solver::protocol::{CaseReport, Status};
@@ -332,6 +333,7 @@ async fn a_sigkilled_postgres_loses_no_case_and_runs_none_twice() {
         preset: None,
         spec: serde_json::json!({}),
         varied: vec!["mu".to_string()],
+        snapshots: SnapshotChoice::All,
         cases,
         idempotency: None,
     };

@@ -232,6 +232,11 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     let params = &doc["components"]["schemas"]["CaseParams"]["properties"];
     assert_eq!(params["h"]["default"], 1.6e-3);
     assert!(doc["components"]["schemas"].get("PhaseDiagram").is_some());
+    let snapshots = &doc["components"]["schemas"]["SweepSpec"]["properties"]["snapshots"];
+    assert_eq!(
+        (&snapshots["enum"], &snapshots["default"]),
+        (&json!(["all", "events", "none"]), &json!("all"))
+    );
     let (status, swagger) = get_text(&c, &format!("{url}/api/docs/")).await;
     assert_eq!(status, StatusCode::OK);
     assert!(swagger.contains("swagger-ui"), "{swagger}");
@@ -244,7 +249,10 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         .iter()
         .map(|p| p["name"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["fig7", "fig9", "fig11"]);
+    assert_eq!(
+        names,
+        ["fig7", "fig9", "fig11", "hysteresis", "twist", "materials"]
+    );
     assert_eq!(presets[1]["grid"]["n"], json!([1, 2, 3, 4, 5]));
     assert_eq!(presets[2]["base_params"]["h"], 3.4e-3);
 
@@ -878,6 +886,11 @@ async fn bad_input_gets_a_4xx_with_the_field_and_the_reason() {
         ),
         (r#"{"base": 3}"#.into(), StatusCode::UNPROCESSABLE_ENTITY, "base"),
         (
+            r#"{"snapshots": "some"}"#.into(),
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "snapshots",
+        ),
+        (
             r#"{"grid": {"h": [0.001, 0.05]}}"#.into(),
             StatusCode::UNPROCESSABLE_ENTITY,
             "grid.h[1]",
@@ -1284,6 +1297,7 @@ async fn queue_figures() {
         preset: None,
         spec: json!({}),
         varied: vec!["mu".to_string()],
+        snapshots: knotsweep_worker::store::SnapshotChoice::All,
         cases,
         idempotency: None,
     };

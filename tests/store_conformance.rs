@@ -7,8 +7,8 @@ mod common;
 
 use common::{drop_database, fresh_postgres, missing};
 use knotsweep_worker::store::{
-    CaseState, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep, RetryPolicy, Store,
-    StoreError, StoreOptions, SweepAction, SweepState, open_store,
+    CaseState, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep, RetryPolicy,
+    SnapshotChoice, Store, StoreError, StoreOptions, SweepAction, SweepState, open_store,
 };
 use solver::case::CaseParams;
 use solver::protocol::{CaseReport, Status};
@@ -85,6 +85,7 @@ fn sweep(cases: Vec<NewCase>) -> NewSweep {
         preset: None,
         spec: serde_json::json!({}),
         varied: vec!["mu".to_string()],
+        snapshots: SnapshotChoice::All,
         cases,
         idempotency: None,
     }

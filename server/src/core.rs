@@ -418,8 +418,9 @@ impl Core {
 
     /// The snapshots as ParaView files (`report::vtk`: `case-{id}.pvd` over
     /// `case-{id}/*.vtp`) in a zip archive; 404 before the result.
-    /// Parsing the snapshots (about 1.4 MB of JSON at K = 301) and writing the
-    /// archive run on the blocking pool, not on the async workers.
+    /// Parsing the snapshots (over a megabyte of JSON for a default case:
+    /// docs/API.md, "Stored results") and writing the archive run on the
+    /// blocking pool, not on the async workers.
     pub async fn snapshots_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
         let c = self.case_record(id).await?;
         let json = self.snapshots_of(&c).await?;
@@ -504,6 +505,7 @@ fn new_sweep(spec: &SweepSpec, raw: &Value, expanded: Expanded, idempotency_key:
         preset: expanded.preset,
         spec: serde_json::to_value(spec).expect("spec serialises"),
         varied: expanded.varied,
+        snapshots: spec.snapshots.unwrap_or_default(),
         cases: with_twins(expanded.cases, expanded.twins),
         idempotency: idempotency_key.map(|key| Idempotency {
             key: key.to_string(),

@@ -5,6 +5,7 @@
 //! bounds where they are fixed numbers (`CaseParams::validate` checks the
 //! same table and is authoritative), and its group as `x-group` (the web
 //! form's sections).
+use knotsweep_worker::store::SnapshotChoice;
 use serde_json::Value;
 use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
 use utoipa::openapi::extensions::Extensions;
@@ -84,6 +85,21 @@ pub fn case_params_ref() -> RefOr<Schema> {
 /// A partial `CaseParams` (base of a sweep): same schema, all optional.
 pub fn partial_case_params() -> RefOr<Schema> {
     case_params_ref()
+}
+
+/// A sweep's `snapshots`: one of the words of `SnapshotChoice`, `all` by
+/// default.
+pub fn snapshot_choice() -> Schema {
+    let words = SnapshotChoice::ALL.map(SnapshotChoice::as_str);
+    ObjectBuilder::new()
+        .schema_type(SchemaType::Type(Type::String))
+        .description(Some(
+            "Which snapshots the results keep: all, events (those around each inversion or flip back) or none. \
+             The cases and their keys are the same whatever is kept.",
+        ))
+        .enum_values(Some(words))
+        .default(Some(Value::from(SnapshotChoice::default().as_str())))
+        .into()
 }
 
 #[cfg(test)]

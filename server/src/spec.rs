@@ -2,6 +2,7 @@
 //! expansion into validated cases. The parameters are `solver::case::CaseParams`
 //! (the one definition): the base and every grid value are applied to it by
 //! field name, so any field can be set or varied.
+use knotsweep_worker::store::SnapshotChoice;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use solver::case::CaseParams;
@@ -73,6 +74,12 @@ pub struct SweepSpec {
     /// inversion its numerical uncertainty. About 3 times the cost.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub certify: Option<bool>,
+    /// Which snapshots the results keep: `all` (the default), `events` (those
+    /// around each inversion or flip back) or `none`. The cases and their
+    /// keys are the same whatever is kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(schema_with = crate::openapi::snapshot_choice)]
+    pub snapshots: Option<SnapshotChoice>,
 }
 
 /// A field and why its value was refused.
@@ -505,6 +512,37 @@ mod tests {
 
     fn fields(r: Result<Expanded, Vec<FieldError>>) -> Vec<String> {
         r.unwrap_err().into_iter().map(|e| e.field).collect()
+    }
+
+    /// `snapshots` takes its three words (`all` when left out), names
+    /// itself when refused, and leaves the cases and their keys alone.
+    #[test]
+    fn the_snapshot_choice_is_read_and_changes_no_case() {
+        let keys = |json: Value| {
+            let (spec, _) = crate::Core::parse_spec(json.to_string().as_bytes()).unwrap();
+            let expanded = expand(&spec, &Limits::default()).unwrap();
+            let keys: Vec<String> = (expanded.cases.iter())
+                .map(|c| knotsweep_worker::case_key(&c.params))
+                .collect();
+            (spec.snapshots, keys)
+        };
+        let (choice, all) = keys(serde_json::json!({"preset": "hysteresis"}));
+        assert_eq!(choice, None);
+        for (word, expected) in [
+            ("all", SnapshotChoice::All),
+            ("events", SnapshotChoice::Events),
+            ("none", SnapshotChoice::None),
+        ] {
+            let (choice, these) = keys(serde_json::json!({"preset": "hysteresis", "snapshots": word}));
+            assert_eq!((choice, &these), (Some(expected), &all), "{word}");
+        }
+        let refused = crate::Core::parse_spec(br#"{"snapshots": "some"}"#).unwrap_err();
+        match refused {
+            crate::error::CoreError::Invalid(fields) => {
+                assert_eq!(fields[0].field, "snapshots", "{fields:?}")
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

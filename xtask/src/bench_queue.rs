@@ -71,6 +71,7 @@ pub fn run(args: Args) -> Result<()> {
                 preset: None,
                 spec: serde_json::json!({}),
                 varied: vec!["mu".into()],
+                snapshots: knotsweep_worker::store::SnapshotChoice::All,
                 cases,
                 idempotency: None,
             };

@@ -1,6 +1,7 @@
-//! `xtask`: the benchmarks of BENCHMARKS.md (`cargo run --release -p xtask -- --help`).
+//! `xtask`: the benchmarks of BENCHMARKS.md and the store's sizes of docs/API.md
+//! (`cargo run --release -p xtask -- --help`).
 use clap::{Parser, Subcommand};
-use xtask::{bench_queue, bench_rods, bench_soak};
+use xtask::{bench_queue, bench_rods, bench_soak, store_sizes};
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "knotsweep's load generators and benchmarks")]
@@ -20,6 +21,9 @@ enum Command {
     /// The solver's cost and inversion across materials and slenderness, against the paper's rod (markdown tables).
     #[command(name = "bench-rods")]
     Rods(bench_rods::Args),
+    /// What results take in the store: a report's series and snapshots as JSON and packed, or a SQLite store's files per result.
+    #[command(name = "store-sizes")]
+    StoreSizes(store_sizes::Args),
 }
 
 fn main() {
@@ -27,6 +31,7 @@ fn main() {
         Command::Queue(args) => bench_queue::run(args),
         Command::Soak(args) => bench_soak::run(args, &mut std::io::stdout()),
         Command::Rods(args) => bench_rods::run(args).map(|doc| print!("{doc}")),
+        Command::StoreSizes(args) => store_sizes::run(args).map(|doc| print!("{doc}")),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

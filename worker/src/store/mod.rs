@@ -17,6 +17,7 @@
 //! - an expired lease returns the case to the queue (with backoff) or, after
 //!   `max_attempts` claims, marks it `failed` with the reason;
 //! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
+pub mod codec;
 pub mod postgres;
 mod rows;
 mod sql;
@@ -161,6 +162,58 @@ impl CaseState {
     }
 }
 
+/// Which of a result's snapshots the store keeps, chosen per sweep. A case
+/// that several sweeps asked for keeps the most of their choices (`all` over
+/// `events` over `none`); a case already done when a sweep asks for it keeps
+/// what was stored. The choice is no part of a case's key: the physics is
+/// the same whatever is kept.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SnapshotChoice {
+    /// No snapshots.
+    None,
+    /// The snapshots around each event (inversion, flip back): those whose
+    /// label names one, as `before_inversion` or `after_flip_back`.
+    Events,
+    /// Every snapshot the solver took.
+    #[default]
+    All,
+}
+
+impl SnapshotChoice {
+    /// Every choice, as the API lists them.
+    pub const ALL: [Self; 3] = [Self::All, Self::Events, Self::None];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Events => "events",
+            Self::All => "all",
+        }
+    }
+
+    pub fn parse(s: &str) -> StoreResult<Self> {
+        match s {
+            "none" => Ok(Self::None),
+            "events" => Ok(Self::Events),
+            "all" => Ok(Self::All),
+            other => Err(StoreError::Corrupt(format!("snapshot choice {other:?}"))),
+        }
+    }
+
+    /// Whether a snapshot labelled `label` is kept.
+    pub fn keeps(self, label: &str) -> bool {
+        use solver::protocol::EventKind;
+        match self {
+            Self::None => false,
+            Self::Events => [EventKind::Inversion, EventKind::FlipBack]
+                .iter()
+                .any(|kind| label.ends_with(&format!("_{kind}"))),
+            Self::All => true,
+        }
+    }
+}
+
 /// A case to enqueue: its parameters and key.
 #[derive(Clone, Debug)]
 pub struct NewCase {
@@ -192,6 +245,8 @@ pub struct NewSweep {
     pub spec: serde_json::Value,
     /// Grid axes in order.
     pub varied: Vec<String>,
+    /// Which snapshots its cases' results keep.
+    pub snapshots: SnapshotChoice,
     /// The cases in grid order (distinct keys).
     pub cases: Vec<NewCase>,
     /// `Idempotency-Key` and a hash of the request it came with.
@@ -392,9 +447,10 @@ pub trait Store: Send + Sync + 'static {
     async fn get_case(&self, id: i64) -> StoreResult<Option<CaseRecord>>;
     /// Ids of the sweeps that asked for a case.
     async fn case_sweeps(&self, id: i64) -> StoreResult<Vec<i64>>;
-    /// The series of a case's result as stored (JSON array of samples).
+    /// The series of a case's result (JSON array of samples): decoded from
+    /// its packed form, or the JSON text of a result stored before it.
     async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>>;
-    /// The snapshots of a case's result as stored (JSON array).
+    /// The snapshots of a case's result (JSON array), likewise.
     async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>>;
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>>;
     async fn append_log(&self, case_id: i64, level: &str, message: &str) -> StoreResult<()>;
@@ -416,7 +472,9 @@ pub trait Store: Send + Sync + 'static {
     ) -> StoreResult<Heartbeat>;
     /// Stores the result and marks the case done, if `lease` is current;
     /// `Ok(false)` otherwise (nothing written). `report.status` must not be
-    /// `cancelled`.
+    /// `cancelled`. The series and snapshots are stored packed (`codec`), the
+    /// snapshots those that the [`SnapshotChoice`] of the sweeps asking for
+    /// the case keeps.
     async fn complete(&self, lease: &Lease, report: &CaseReport) -> StoreResult<bool>;
     /// A retryable failure of this attempt (not a solver failure).
     async fn fail_attempt(&self, lease: &Lease, reason: &str) -> StoreResult<FailOutcome>;
@@ -527,6 +585,7 @@ mod tests {
             preset: None,
             spec: serde_json::Value::Null,
             varied: vec!["mu".to_string()],
+            snapshots: SnapshotChoice::All,
             cases,
             idempotency: None,
         };

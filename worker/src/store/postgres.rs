@@ -182,4 +182,30 @@ mod tests {
             db.drop_database().await;
         }
     }
+
+    #[tokio::test]
+    async fn packed_results_on_postgres() {
+        if let Some(db) = testing::postgres("packed").await {
+            testing::packed_results(&db.store).await;
+            db.drop_database().await;
+        }
+    }
+
+    /// A database written before the packed results, opened by the store
+    /// (which migrates it): the old rows are served as stored.
+    #[tokio::test]
+    async fn old_results_on_postgres_stay_readable() {
+        let Some(empty) = testing::empty_postgres("old").await else {
+            return;
+        };
+        sqlx::any::install_default_drivers();
+        let pool = sqlx::AnyPool::connect(&empty.url).await.unwrap();
+        let before = testing::before_packing(sqlx::migrate!("../migrations/postgres"));
+        before.run(&pool).await.unwrap();
+        let id = testing::write_old_result(&pool).await;
+        pool.close().await;
+        let db = empty.open().await;
+        testing::read_old_result(&db.store, id).await;
+        db.drop_database().await;
+    }
 }

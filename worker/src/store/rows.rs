@@ -1,6 +1,8 @@
 //! Decoding stored rows into records, once for every backend: the schema has
-//! three column types (integer, real, text), read through [`Columns`].
+//! four column types (integer, real, text, bytes), read through [`Columns`].
+use super::codec::{self, CodecError};
 use super::*;
+use solver::snapshot::Snapshot;
 use sqlx::Row;
 use sqlx::any::AnyRow;
 
@@ -11,6 +13,7 @@ pub(crate) trait Columns {
     fn int(&self, column: &str) -> StoreResult<i64>;
     fn int_or_null(&self, column: &str) -> StoreResult<Option<i64>>;
     fn real(&self, column: &str) -> StoreResult<f64>;
+    fn bytes_or_null(&self, column: &str) -> StoreResult<Option<Vec<u8>>>;
 }
 
 impl Columns for AnyRow {
@@ -27,6 +30,9 @@ impl Columns for AnyRow {
         Ok(self.try_get(column)?)
     }
     fn real(&self, column: &str) -> StoreResult<f64> {
+        Ok(self.try_get(column)?)
+    }
+    fn bytes_or_null(&self, column: &str) -> StoreResult<Option<Vec<u8>>> {
         Ok(self.try_get(column)?)
     }
 }
@@ -124,13 +130,13 @@ pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     })
 }
 
-/// What a completed report stores: outcome word, summary, series, snapshots and
-/// inversion (JSON text), and the log line.
+/// What a completed report stores: outcome word, summary and inversion (JSON
+/// text), the packed series, and the log line. The snapshots are packed by
+/// [`packed_snapshots`] once the sweeps' choice is known.
 pub(crate) struct StoredResult {
     pub outcome: String,
     pub summary: String,
-    pub series: String,
-    pub snapshots: String,
+    pub series: Vec<u8>,
     pub inversion: Option<String>,
     pub message: String,
 }
@@ -166,12 +172,54 @@ impl StoredResult {
         Ok(Self {
             outcome,
             summary: summary.to_string(),
-            series: serde_json::to_string(&report.series).expect("series serialises"),
-            snapshots: serde_json::to_string(&report.snapshots).expect("snapshots serialise"),
+            series: codec::pack_series(&report.series),
             inversion: report
                 .inversion
                 .map(|i| serde_json::to_string(&i).expect("inversion serialises")),
             message,
         })
+    }
+}
+
+/// The snapshots `choice` keeps, packed.
+pub(crate) fn packed_snapshots(snapshots: &[Snapshot], choice: SnapshotChoice) -> Vec<u8> {
+    let kept: Vec<Snapshot> = (snapshots.iter())
+        .filter(|s| choice.keeps(&s.label))
+        .cloned()
+        .collect();
+    codec::pack_snapshots(&kept)
+}
+
+/// A series or snapshots column pair as the API serves it: the packed bytes
+/// decoded and written as JSON, or the JSON text of a row stored before the
+/// packed columns, as stored.
+pub(crate) fn served_json(row: &AnyRow, what: Packed) -> StoreResult<String> {
+    let (text, packed) = what.columns();
+    let corrupt = |e: CodecError| StoreError::Corrupt(format!("{text}: {e}"));
+    match (row.bytes_or_null(packed)?, row.text_or_null(text)?) {
+        (Some(bytes), _) => Ok(match what {
+            Packed::Series => serde_json::to_string(&codec::unpack_series(&bytes).map_err(corrupt)?),
+            Packed::Snapshots => serde_json::to_string(&codec::unpack_snapshots(&bytes).map_err(corrupt)?),
+        }
+        .expect("decoded values serialise")),
+        (None, Some(json)) => Ok(json),
+        (None, None) => Err(StoreError::Corrupt(format!("a result without its {text}"))),
+    }
+}
+
+/// The packed columns of a result.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Packed {
+    Series,
+    Snapshots,
+}
+
+impl Packed {
+    /// The JSON text column (rows stored before packing) and the packed one.
+    pub(crate) fn columns(self) -> (&'static str, &'static str) {
+        match self {
+            Self::Series => ("series", "series_packed"),
+            Self::Snapshots => ("snapshots", "snapshots_packed"),
+        }
     }
 }

@@ -119,6 +119,7 @@ impl SqliteStore {
 
 #[cfg(test)]
 mod tests {
+    use super::{SqliteOptions, SqliteStore};
     use crate::store::testing;
 
     #[tokio::test]
@@ -137,5 +138,29 @@ mod tests {
     async fn results_on_sqlite() {
         let (store, _dir) = testing::sqlite().await;
         testing::results(&store).await;
+    }
+
+    #[tokio::test]
+    async fn packed_results_on_sqlite() {
+        let (store, _dir) = testing::sqlite().await;
+        testing::packed_results(&store).await;
+    }
+
+    /// A file written before the packed results, opened by the store (which
+    /// rebuilds its results table): the old rows are served as stored.
+    #[tokio::test]
+    async fn old_results_on_sqlite_stay_readable() {
+        let dir = tempfile::tempdir().unwrap();
+        let url = format!("sqlite://{}", dir.path().join("old.sqlite").display());
+        sqlx::any::install_default_drivers();
+        let pool = sqlx::AnyPool::connect(&format!("{url}?mode=rwc")).await.unwrap();
+        let before = testing::before_packing(sqlx::migrate!("../migrations/sqlite"));
+        before.run(&pool).await.unwrap();
+        let id = testing::write_old_result(&pool).await;
+        pool.close().await;
+        let store = SqliteStore::connect(&url, SqliteOptions::default())
+            .await
+            .unwrap();
+        testing::read_old_result(&store, id).await;
     }
 }

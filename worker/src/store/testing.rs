@@ -28,6 +28,44 @@ pub(crate) async fn sqlite() -> (SqliteStore, tempfile::TempDir) {
 /// (with the reason printed) when no server answers, a failure when `CI` is
 /// set.
 pub(crate) async fn postgres(tag: &str) -> Option<PgDatabase> {
+    let empty = empty_postgres(tag).await?;
+    let options = StoreOptions {
+        retry: retry(),
+        ..StoreOptions::default()
+    };
+    let store = PgStore::connect(&empty.url, options)
+        .await
+        .expect("PostgreSQL store opens");
+    Some(PgDatabase {
+        store,
+        admin: empty.admin,
+        db: empty.db,
+    })
+}
+
+/// A new, empty database of the test server (as [`postgres`]'s, without a
+/// store).
+pub(crate) struct EmptyPg {
+    pub url: String,
+    admin: String,
+    db: String,
+}
+
+impl EmptyPg {
+    /// Its store, which migrates it.
+    pub async fn open(self) -> PgDatabase {
+        let store = PgStore::connect(&self.url, StoreOptions::default())
+            .await
+            .expect("PostgreSQL store opens");
+        PgDatabase {
+            store,
+            admin: self.admin,
+            db: self.db,
+        }
+    }
+}
+
+pub(crate) async fn empty_postgres(tag: &str) -> Option<EmptyPg> {
     use sqlx::Connection;
     let admin = std::env::var("KNOTSWEEP_TEST_POSTGRES")
         .unwrap_or_else(|_| "postgres://postgres@127.0.0.1:5432/test".to_string());
@@ -43,17 +81,11 @@ pub(crate) async fn postgres(tag: &str) -> Option<PgDatabase> {
         .await
         .expect("the test server lets us create a database");
     let (base, _) = admin.rsplit_once('/').expect("URL has a database");
-    let options = StoreOptions {
-        retry: retry(),
-        ..StoreOptions::default()
-    };
-    let store = PgStore::connect(&format!("{base}/{db}"), options)
-        .await
-        .expect("PostgreSQL store opens");
-    Some(PgDatabase { store, admin, db })
+    let url = format!("{base}/{db}");
+    Some(EmptyPg { url, admin, db })
 }
 
-fn skipped(why: &str) -> Option<PgDatabase> {
+fn skipped<T>(why: &str) -> Option<T> {
     if std::env::var_os("CI").is_some_and(|v| !v.is_empty()) {
         panic!("PostgreSQL unit check: {why} (CI is set: a missing prerequisite fails the test)");
     }
@@ -108,6 +140,7 @@ fn sweep(mus: &[f64]) -> NewSweep {
         preset: None,
         spec: serde_json::json!({ "mu": mus }),
         varied: vec!["mu".to_string()],
+        snapshots: SnapshotChoice::All,
         cases: cases(mus),
         idempotency: None,
     }
@@ -346,5 +379,184 @@ pub(crate) async fn results(store: &dyn Store) {
     assert_eq!(
         store.status_counts().await.unwrap(),
         vec![("completed".to_string(), 1)]
+    );
+}
+
+/// A snapshot labelled `label` of a two-node rod.
+fn snapshot(label: &str, l_k_bar: f64) -> solver::snapshot::Snapshot {
+    solver::snapshot::Snapshot {
+        label: label.to_string(),
+        l_k_bar,
+        time: l_k_bar / 100.0,
+        points: vec![[0.0, 0.0, 0.0], [0.5, 0.25, -0.125]],
+        twist_rate: vec![1.0, -2.0],
+        curvature: vec![0.5, 0.25],
+        velocity: vec![[0.0, 0.5, 1.0], [-1.0, 0.25, 0.0]],
+        contacts: Vec::new(),
+    }
+}
+
+/// Labels a report's snapshots take: the start, stage names and events.
+const LABELS: [&str; 7] = [
+    "relaxed",
+    "pull",
+    "near_inversion",
+    "at_inversion",
+    "after_inversion",
+    "before_flip_back",
+    "final",
+];
+
+/// Packed results: the series comes back bit for bit (the same JSON as the
+/// report's), the snapshots within the codec's bounds (exact on these
+/// values), and each sweep's snapshot choice is honoured: the most of the
+/// choices of the sweeps that asked for a case.
+pub(crate) async fn packed_results(store: &dyn Store) {
+    let chosen = |mus: &[f64], snapshots| NewSweep {
+        snapshots,
+        ..sweep(mus)
+    };
+    create(store, chosen(&[0.1], SnapshotChoice::All)).await;
+    create(store, chosen(&[0.2, 0.4], SnapshotChoice::Events)).await;
+    create(store, chosen(&[0.3, 0.4], SnapshotChoice::None)).await;
+    let series: Vec<solver::measurements::Sample> = (0..50)
+        .map(|i| solver::measurements::Sample {
+            time: i as f64 * 1e-3,
+            l_k_bar: 200.0 - 0.37 * i as f64,
+            f_bar: (i as f64).sqrt() / 3.0,
+            contacts: i,
+            stage: i / 20,
+            ..Default::default()
+        })
+        .collect();
+    let mut kept = Vec::new();
+    while let Some(claim) = store.claim("w1", LEASE).await.unwrap() {
+        let done = CaseReport {
+            series: series.clone(),
+            snapshots: (LABELS.iter().enumerate())
+                .map(|(i, label)| snapshot(label, i as f64))
+                .collect(),
+            ..report(claim.params.clone(), Status::Completed)
+        };
+        assert!(store.complete(&claim.lease, &done).await.unwrap());
+        let id = claim.lease.case_id;
+        let json = store.case_series_json(id).await.unwrap().expect("a series");
+        assert_eq!(json, serde_json::to_string(&series).unwrap(), "lossless series");
+        let json = store.case_snapshots_json(id).await.unwrap().expect("snapshots");
+        let snapshots: Vec<solver::snapshot::Snapshot> = serde_json::from_str(&json).unwrap();
+        let labels: Vec<String> = snapshots.iter().map(|s| s.label.clone()).collect();
+        for s in &snapshots {
+            let i = LABELS.iter().position(|l| *l == s.label).unwrap();
+            assert_eq!(*s, snapshot(&s.label, i as f64), "exact on these values");
+        }
+        kept.push((claim.params.mu, labels));
+    }
+    kept.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let events = [
+        "near_inversion",
+        "at_inversion",
+        "after_inversion",
+        "before_flip_back",
+    ];
+    let expected: [(f64, Vec<&str>); 4] = [
+        (0.1, LABELS.to_vec()),
+        (0.2, events.to_vec()),
+        (0.3, Vec::new()),
+        (0.4, events.to_vec()),
+    ];
+    assert_eq!(kept.len(), 4);
+    for ((mu, labels), (expected_mu, expected_labels)) in kept.iter().zip(expected) {
+        assert_eq!(
+            (*mu, labels.clone()),
+            (
+                expected_mu,
+                expected_labels.iter().map(|l| l.to_string()).collect()
+            )
+        );
+    }
+}
+
+/// The migrations a database stored before the packed results had run.
+pub(crate) fn before_packing(mut migrator: sqlx::migrate::Migrator) -> sqlx::migrate::Migrator {
+    const PACKED: i64 = 20261126000000;
+    let earlier: Vec<_> = migrator.iter().filter(|m| m.version < PACKED).cloned().collect();
+    assert!(
+        earlier.len() < migrator.iter().count(),
+        "the packing migration exists"
+    );
+    migrator.migrations = earlier.into();
+    migrator
+}
+
+/// The series and snapshots of a result stored before the packed columns:
+/// JSON text, here in the older names (`force`, `f_bar`) the report's
+/// aliases read.
+const OLD_SERIES: &str = r#"[{"time":0.0,"l_k_bar":190.5,"l_c_over_l":0.4,"force":0.01,"f_bar":2.5,"width":0.01,"height":0.005,"h_bar":0.5,"kinetic_energy":0.0,"contacts":3,"active_contacts":2,"max_penetration_over_h":0.001,"epsilon":0.7,"phi":1.0,"newton_iterations":4,"dt":0.0001}]"#;
+const OLD_SNAPSHOTS: &str =
+    r#"[{"label":"at_inversion","l_k_bar":120.0,"points":[[0.0,0.0,0.0],[0.1,0.0,0.0]]}]"#;
+
+/// Writes, through the schema of [`before_packing`], a sweep and a done
+/// case whose result holds the series and snapshots as JSON text; returns
+/// the case's id.
+pub(crate) async fn write_old_result(pool: &sqlx::AnyPool) -> i64 {
+    use rows::Columns;
+    let sweep = sqlx::query(
+        "INSERT INTO sweeps (name, preset, spec, varied, state, created_at, updated_at) \
+         VALUES ('old', NULL, '{}', '[\"mu\"]', 'active', 1, 1) RETURNING id",
+    )
+    .fetch_one(pool)
+    .await
+    .unwrap()
+    .int("id")
+    .unwrap();
+    let params = serde_json::to_string(&CaseParams::default()).unwrap();
+    let case = sqlx::query(
+        "INSERT INTO cases (case_key, solver_version, params, status, max_attempts, created_at, finished_at) \
+         VALUES ('old-key', 'old', $1, 'done', 3, 1, 2) RETURNING id",
+    )
+    .bind(params)
+    .fetch_one(pool)
+    .await
+    .unwrap()
+    .int("id")
+    .unwrap();
+    sqlx::query("INSERT INTO sweep_cases (sweep_id, case_id, position) VALUES ($1, $2, 0)")
+        .bind(sweep)
+        .bind(case)
+        .execute(pool)
+        .await
+        .unwrap();
+    sqlx::query(
+        "INSERT INTO results (case_id, outcome, reason, inversion, summary, series, snapshots, wall_time, worker, \
+         fence, created_at) VALUES ($1, 'completed', '', NULL, '{\"determinant_final\": 7}', $2, $3, 1.5, 'w-old', 1, 2)",
+    )
+    .bind(case)
+    .bind(OLD_SERIES)
+    .bind(OLD_SNAPSHOTS)
+    .execute(pool)
+    .await
+    .unwrap();
+    case
+}
+
+/// The result [`write_old_result`] wrote, read through the migrated store:
+/// served as stored.
+pub(crate) async fn read_old_result(store: &dyn Store, id: i64) {
+    let c = case(store, id).await;
+    assert_eq!((c.state, c.status()), (CaseState::Done, "completed"));
+    assert_eq!(c.result.expect("a result").worker, "w-old");
+    assert_eq!(
+        store.case_series_json(id).await.unwrap().as_deref(),
+        Some(OLD_SERIES)
+    );
+    assert_eq!(
+        store.case_snapshots_json(id).await.unwrap().as_deref(),
+        Some(OLD_SNAPSHOTS)
+    );
+    let series: Vec<solver::measurements::Sample> = serde_json::from_str(OLD_SERIES).unwrap();
+    assert_eq!(
+        (series[0].f_bar, series[0].contacts),
+        (2.5, 3),
+        "the report reads it"
     );
 }

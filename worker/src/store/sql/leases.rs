@@ -225,9 +225,21 @@ impl<B: Backend> SqlStore<B> {
             tx.rollback().await?;
             return Ok(false);
         }
+        let choices = sqlx::query(
+            "SELECT s.snapshots FROM sweep_cases sc JOIN sweeps s ON s.id = sc.sweep_id WHERE sc.case_id = $1",
+        )
+        .bind(lease.case_id)
+        .fetch_all(&mut *tx)
+        .await?;
+        let choice = (choices.iter())
+            .map(|r| SnapshotChoice::parse(&r.text("snapshots")?))
+            .collect::<StoreResult<Vec<_>>>()?
+            .into_iter()
+            .max()
+            .unwrap_or_default();
         sqlx::query(
-            "INSERT INTO results (case_id, outcome, reason, inversion, summary, series, snapshots, wall_time, \
-             worker, fence, created_at) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11)",
+            "INSERT INTO results (case_id, outcome, reason, inversion, summary, series_packed, snapshots_packed, \
+             wall_time, worker, fence, created_at) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11)",
         )
         .bind(lease.case_id)
         .bind(&stored.outcome)
@@ -235,7 +247,7 @@ impl<B: Backend> SqlStore<B> {
         .bind(&stored.inversion)
         .bind(&stored.summary)
         .bind(&stored.series)
-        .bind(&stored.snapshots)
+        .bind(packed_snapshots(&report.snapshots, choice))
         .bind(report.stats.wall_time)
         .bind(&lease.owner)
         .bind(lease.fence)

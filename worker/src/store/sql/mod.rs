@@ -1,8 +1,8 @@
 //! The queue's statements and logic, written once for both backends.
 //!
 //! [`SqlStore`] runs on sqlx's `Any` driver: one pool type, rows decoded the
-//! same way (the schema has integers, reals and text only). A [`Backend`]
-//! holds what differs. Its dialect is three SQL fragments (how a
+//! same way (the schema has integers, reals, text and bytes only). A
+//! [`Backend`] holds what differs. Its dialect is three SQL fragments (how a
 //! read-then-write transaction begins and locks the rows it reads) and two
 //! hooks that do nothing by default (serialising sweep creation, announcing
 //! new work); its own code is the claim and the wait for work. Everything
@@ -81,6 +81,20 @@ impl<B: Backend> SqlStore<B> {
     /// The connection pool (for tests and diagnostics).
     pub fn pool(&self) -> &AnyPool {
         &self.pool
+    }
+
+    /// The series or snapshots of case `id`'s result as JSON ([`served_json`],
+    /// decoded on the blocking pool); `None` before the result.
+    async fn served(&self, id: i64, what: Packed) -> StoreResult<Option<String>> {
+        let (text, packed) = what.columns();
+        let sql = format!("SELECT {text}, {packed} FROM results WHERE case_id = $1");
+        let Some(row) = sqlx::query(&sql).bind(id).fetch_optional(&self.pool).await? else {
+            return Ok(None);
+        };
+        tokio::task::spawn_blocking(move || served_json(&row, what))
+            .await
+            .map_err(|e| StoreError::Corrupt(format!("decoding the result of case {id}: {e}")))?
+            .map(Some)
     }
 }
 
@@ -166,15 +180,11 @@ impl<B: Backend> Store for SqlStore<B> {
     }
 
     async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>> {
-        let sql = "SELECT series FROM results WHERE case_id = $1";
-        let row = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await?;
-        row.map(|r| r.text("series")).transpose()
+        self.served(id, Packed::Series).await
     }
 
     async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>> {
-        let sql = "SELECT snapshots FROM results WHERE case_id = $1";
-        let row = sqlx::query(sql).bind(id).fetch_optional(&self.pool).await?;
-        row.map(|r| r.text("snapshots")).transpose()
+        self.served(id, Packed::Snapshots).await
     }
 
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {

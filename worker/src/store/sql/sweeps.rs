@@ -16,7 +16,7 @@ impl<B: Backend> SqlStore<B> {
         let now = now_ms();
         let id = sqlx::query(
             "INSERT INTO sweeps (name, preset, spec, varied, state, idempotency_key, request_hash, created_at, \
-             updated_at) VALUES ($1, $2, $3, $4, 'active', $5, $6, $7, $7) RETURNING id",
+             updated_at, snapshots) VALUES ($1, $2, $3, $4, 'active', $5, $6, $7, $7, $8) RETURNING id",
         )
         .bind(&sweep.name)
         .bind(&sweep.preset)
@@ -25,6 +25,7 @@ impl<B: Backend> SqlStore<B> {
         .bind(sweep.idempotency.as_ref().map(|i| &i.key))
         .bind(sweep.idempotency.as_ref().map(|i| &i.request_hash))
         .bind(now)
+        .bind(sweep.snapshots.as_str())
         .fetch_one(&mut *tx)
         .await?
         .int("id")?;

@@ -50,12 +50,32 @@ struct Found {
 }
 
 /// The arguments of the command starting at `text` (just after `knotsweep `):
-/// up to a shell operator, a comment or the end.
+/// shell words (single and double quotes group, and are removed) up to a
+/// shell operator, a comment or the end.
 fn arguments(text: &str) -> Vec<String> {
-    text.split_whitespace()
-        .take_while(|t| !matches!(*t, "|" | ">" | "&&" | "||" | ";" | "#" | "\\" | "2>&1"))
-        .map(str::to_string)
-        .collect()
+    let mut words = Vec::new();
+    let (mut word, mut quote, mut started) = (String::new(), None, false);
+    for c in text.chars().chain(std::iter::once(' ')) {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), c) => word.push(c),
+            (None, '\'' | '"') => (quote, started) = (Some(c), true),
+            (None, c) if c.is_whitespace() => {
+                if started {
+                    if matches!(word.as_str(), "|" | ">" | "&&" | "||" | ";" | "#" | "\\" | "2>&1") {
+                        return words;
+                    }
+                    words.push(std::mem::take(&mut word));
+                    started = false;
+                }
+            }
+            (None, c) => {
+                word.push(c);
+                started = true;
+            }
+        }
+    }
+    words
 }
 
 /// `knotsweep SUBCOMMAND ...` and `cargo run --release -- SUBCOMMAND ...`
@@ -82,27 +102,41 @@ fn commands_in(text: &str, at: &str, found: &mut Vec<Found>) {
 }
 
 /// Every command of a markdown document: in its code blocks' lines and its
-/// inline code spans.
+/// inline code spans (which may run over a paragraph's lines).
 fn commands(path: &Path) -> Vec<Found> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut found = Vec::new();
     let mut in_block = false;
+    let mut paragraph = (String::new(), String::new());
+    let spans = |(at, text): &(String, String), found: &mut Vec<Found>| {
+        for (i, span) in text.split('`').enumerate() {
+            if i % 2 == 1 {
+                commands_in(span, at, found);
+            }
+        }
+    };
     for (k, line) in text.lines().enumerate() {
         let at = format!("{}:{}", path.display(), k + 1);
-        if line.trim_start().starts_with("```") {
-            in_block = !in_block;
+        if line.trim_start().starts_with("```") || line.trim().is_empty() {
+            spans(&paragraph, &mut found);
+            paragraph = (String::new(), String::new());
+            if !line.trim().is_empty() {
+                in_block = !in_block;
+            }
             continue;
         }
         if in_block {
             commands_in(line, &at, &mut found);
             continue;
         }
-        for (i, span) in line.split('`').enumerate() {
-            if i % 2 == 1 {
-                commands_in(span, &at, &mut found);
-            }
+        if paragraph.1.is_empty() {
+            paragraph.0 = at;
+        } else {
+            paragraph.1.push(' ');
         }
+        paragraph.1.push_str(line);
     }
+    spans(&paragraph, &mut found);
     found
 }
 
@@ -165,6 +199,17 @@ fn a_broken_command_is_caught() {
     assert_eq!(found[1].args, ["run", "--n", "3", "--mu", "-1"]);
     assert!(problem(&found[0]).is_some(), "an unknown flag");
     assert!(problem(&found[1]).unwrap().contains("mu"), "a value out of range");
+    let quoted = arguments(r#"run --loading '[{"pull": {}}, {"hold": {"seconds": 1}}]' --n 3 # a comment"#);
+    assert_eq!(
+        quoted,
+        [
+            "run",
+            "--loading",
+            r#"[{"pull": {}}, {"hold": {"seconds": 1}}]"#,
+            "--n",
+            "3"
+        ]
+    );
 }
 
 /// The physics revision that README.md and docs/API.md state, every time

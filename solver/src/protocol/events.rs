@@ -107,8 +107,8 @@ mod tests {
         let back = detect(&all, first, Way(-1.0), &criteria, 1).unwrap();
         assert_eq!(
             back.at.sample,
-            first + 38,
-            "l_k bar 319.5 is the 39th sample of the release"
+            first + 39,
+            "l_k bar 319.5 (before the rise) is the release's 40th sample"
         );
     }
 }

@@ -50,16 +50,20 @@ impl Backend for Sqlite {
     const FOR_UPDATE: &'static str = "";
     const SKIP_LOCKED: &'static str = "";
 
-    /// The claim, then its log line (SQLite has no writes inside `WITH`).
+    /// The claim, then its log line, in one transaction (SQLite has no
+    /// writes inside `WITH`): a worker killed between them leaves neither.
     async fn claim(pool: &AnyPool, owner: &str, lease: Duration) -> StoreResult<Option<Claim>> {
         let sql = claim_statement(Self::SKIP_LOCKED);
-        let row = claim_query(&sql, owner, lease).fetch_optional(pool).await?;
+        let mut tx = pool.begin_with(Self::BEGIN).await?;
+        let row = claim_query(&sql, owner, lease).fetch_optional(&mut *tx).await?;
         let Some(claim) = row.map(|r| claim_from_row(&r, owner)).transpose()? else {
+            tx.rollback().await?;
             return Ok(None);
         };
         let (attempt, fence) = (claim.attempt, claim.lease.fence);
         let message = format!("claimed by {owner} (attempt {attempt}, fence {fence})");
-        SqliteStore::log(&mut *pool.acquire().await?, claim.lease.case_id, "info", &message).await?;
+        SqliteStore::log(&mut tx, claim.lease.case_id, "info", &message).await?;
+        tx.commit().await?;
         Ok(Some(claim))
     }
 }

@@ -286,8 +286,8 @@ def run(
       nodes: Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the
           paper's rod is resolved (docs/FIDELITY.md, "Any rod": the convergence in K). The report's params
           give the K used. Range: null or integer in 51..=4001. null: edges of at most 2.08 h (the paper's L =
-          1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most 4001; with initial_shape, its point count.
-          Default: null. Paper: 301.
+          1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most 4001; below mu = 0.05, edges of at most 1.04
+          h, at least 601 nodes; with initial_shape, its point count. Default: null. Paper: 301.
       mass_scaling: Compute a rod whose waves are faster than the paper's rod's, relative to pull_speed, with
           its inertia scaled up to the paper's pull rate pull_speed / sqrt(E / rho) (mass scaling; its weight
           stays physical): inversion is quasi-static, so its l_k bar does not depend on E or rho, and a steel

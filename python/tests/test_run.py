@@ -141,6 +141,9 @@ def test_progress_callback_and_cancel():
 
 def test_ctrl_c_stops_a_run():
     params = dict(QUICK, min_l_k_bar=60.0, pull_speed=0.003)
+    # Python's own Ctrl-C handler, even where the runner started it with
+    # SIGINT ignored (a shell's background job).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
     started = time.perf_counter()
     timer.start()
@@ -149,6 +152,7 @@ def test_ctrl_c_stops_a_run():
             knotsweep.run(**params)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert time.perf_counter() - started < 5.0
 
 

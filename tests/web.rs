@@ -124,6 +124,47 @@ impl Browser {
         }
     }
 
+    /// Fills the form's parameter fields from a case's parameters (a word,
+    /// e.g. the protocol, goes in bare, a number as its JSON text) and the
+    /// grid field `g-mu`.
+    async fn fill_base(&self, base: &Value, mus: &str) {
+        let mut fields = serde_json::Map::new();
+        for (k, v) in base.as_object().unwrap() {
+            let text = v.as_str().map_or_else(|| v.to_string(), str::to_string);
+            fields.insert(format!("p-{k}"), json!(text));
+        }
+        fields.insert("g-mu".into(), json!(mus));
+        self.js(FILL, json!([fields])).await;
+    }
+
+    /// Clicks the form's submit button.
+    async fn submit(&self) {
+        self.js(
+            "document.querySelector('#custom button[type=submit]').click(); return true",
+            json!([]),
+        )
+        .await;
+    }
+
+    /// Submits the form and waits for the new sweep's page: its id.
+    async fn submit_and_open_sweep(&self) -> i64 {
+        self.submit().await;
+        let hash = self
+            .until(
+                "the sweep page",
+                "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash",
+                Duration::from_secs(20),
+            )
+            .await;
+        hash.as_str()
+            .unwrap()
+            .rsplit('/')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    }
+
     async fn screenshot(&self, name: &str) {
         let png = self.call(reqwest::Method::GET, "/screenshot", Value::Null).await;
         let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("web-{name}.png"));
@@ -197,14 +238,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
     // Pulled on to l_k bar 105: mu = 0.1 inverts near 116 in about a second,
     // and so does its refined twin; at mu = 0.05 only the point does.
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
-    let mut fields = serde_json::Map::new();
-    for (k, v) in base.as_object().unwrap() {
-        // A word (e.g. the protocol) goes in bare, a number as its JSON text.
-        let text = v.as_str().map_or_else(|| v.to_string(), str::to_string);
-        fields.insert(format!("p-{k}"), json!(text));
-    }
-    fields.insert("g-mu".into(), json!("0.05, 0.1"));
-    browser.js(FILL, json!([fields])).await;
+    browser.fill_base(&base, "0.05, 0.1").await;
     let count = browser
         .js("return document.getElementById('count').textContent", json!([]))
         .await;
@@ -217,27 +251,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         )
         .await;
     assert_eq!(count, "4 cases: 2 points and their refined twins");
-    browser
-        .js(
-            "document.querySelector('#custom button[type=submit]').click(); return true",
-            json!([]),
-        )
-        .await;
-    let hash = browser
-        .until(
-            "the sweep page",
-            "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash",
-            Duration::from_secs(20),
-        )
-        .await;
-    let id: i64 = hash
-        .as_str()
-        .unwrap()
-        .rsplit('/')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let id = browser.submit_and_open_sweep().await;
     let (_, sweep) = get_sweep(&c, &url, id).await;
     assert_eq!(sweep["total"], 4, "2 points and 2 twins");
     assert_eq!(sweep["spec"]["base"]["h"], json!(5e-3), "{sweep:#}");
@@ -409,12 +423,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
 
     // A bad value: the API's field error next to the field.
     browser.js(FILL, json!([{"p-h": "-1"}])).await;
-    browser
-        .js(
-            "document.querySelector('#custom button[type=submit]').click(); return true",
-            json!([]),
-        )
-        .await;
+    browser.submit().await;
     let error = browser
         .until(
             "the field error",
@@ -552,34 +561,8 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
 
     // Submit: tightened past the snap (near l_k bar 116), then loosened back.
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
-    let mut fields = serde_json::Map::new();
-    for (k, v) in base.as_object().unwrap() {
-        let text = v.as_str().map_or_else(|| v.to_string(), str::to_string);
-        fields.insert(format!("p-{k}"), json!(text));
-    }
-    fields.insert("g-mu".into(), json!("0.1, 0.15"));
-    browser.js(FILL, json!([fields])).await;
-    browser
-        .js(
-            "document.querySelector('#custom button[type=submit]').click(); return true",
-            json!([]),
-        )
-        .await;
-    let hash = browser
-        .until(
-            "the sweep page",
-            "return /^#\\/sweeps\\/\\d+/.test(location.hash) && location.hash",
-            Duration::from_secs(20),
-        )
-        .await;
-    let id: i64 = hash
-        .as_str()
-        .unwrap()
-        .rsplit('/')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    browser.fill_base(&base, "0.1, 0.15").await;
+    let id = browser.submit_and_open_sweep().await;
     let (_, sweep) = get_sweep(&c, &url, id).await;
     assert_eq!(
         sweep["spec"]["base"]["loading"],

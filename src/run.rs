@@ -77,7 +77,11 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
             .help(p.description())
             .value_parser(program);
     }
-    let kind = default.clone();
+    // A braid word is text, though null by default.
+    let kind = match p.range {
+        Range::BraidWord => Value::String(String::new()),
+        _ => default.clone(),
+    };
     let integer = matches!(p.range, Range::Integers(..));
     arg.help(p.description())
         .allow_negative_numbers(true)

@@ -251,7 +251,15 @@ async fn submit_run_and_phase_diagram_end_to_end() {
         .collect();
     assert_eq!(
         names,
-        ["fig7", "fig9", "fig11", "hysteresis", "twist", "materials"]
+        [
+            "fig7",
+            "fig9",
+            "fig11",
+            "hysteresis",
+            "twist",
+            "knots",
+            "materials"
+        ]
     );
     assert_eq!(presets[1]["grid"]["n"], json!([1, 2, 3, 4, 5]));
     assert_eq!(presets[2]["base_params"]["h"], 3.4e-3);

@@ -26,7 +26,7 @@ class Parameter(NamedTuple):
     doc: str
     description: str
     kind: str
-    """``int``, ``float``, ``vector``, ``flag``, ``words``, ``points`` or ``program``."""
+    """``int``, ``float``, ``vector``, ``flag``, ``words``, ``points``, ``program`` or ``text``."""
     words: tuple[str, ...]
 
     @property
@@ -45,6 +45,7 @@ class Parameter(NamedTuple):
             "flag": "bool",
             "points": "ArrayLike",
             "program": "Sequence[Mapping[str, Mapping[str, Any]]]",
+            "text": "str",
         }.get(self.kind)
         if self.kind == "words":
             base = "Literal[" + ", ".join(json.dumps(w) for w in self.words) + "]"

@@ -232,7 +232,7 @@ fn group_word(group: Group) -> String {
 
 /// The parameter table (`solver::case::PARAMETERS`): one dict per parameter
 /// with name, group (its word and title, in form order), unit, default (JSON text), range, null, paper, doc,
-/// description, kind (int, float, vector, flag, words, points, program) and words.
+/// description, kind (int, float, vector, flag, words, points, program, text) and words.
 #[pyfunction]
 fn parameters(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     let list = PyList::empty(py);
@@ -246,6 +246,7 @@ fn parameters(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
             Range::Words(words) => ("words", words),
             Range::Points => ("points", &[]),
             Range::Program => ("program", &[]),
+            Range::BraidWord => ("text", &[]),
         };
         entry.set_item("name", p.name)?;
         entry.set_item("group", group_word(p.group))?;

@@ -52,6 +52,7 @@ fn json(p: &CaseParams) -> Value {
 /// number in e-notation (1.6e-3), a list comma-separated.
 fn flag_text(value: &Value) -> String {
     match value {
+        Value::String(word) if word.contains(' ') => format!("\"{word}\""),
         Value::String(word) => word.clone(),
         Value::Number(n) if n.is_f64() => {
             let x = n.as_f64().expect("a number");

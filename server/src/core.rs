@@ -236,11 +236,18 @@ impl Core {
         })?;
         let base = serde_json::to_value(base).expect("params serialise");
         let (points, _) = views::points(&record, &cases)?;
-        let simplified = futures_util::future::join_all(
-            points
-                .iter()
-                .map(|p| self.simplified_snap(p.case.case.params.n, p.case.case.params.h)),
-        )
+        // The simplified model is the overhand knot's: other knots have no line.
+        let simplified = futures_util::future::join_all(points.iter().map(|p| {
+            let params = &p.case.case.params;
+            let overhand = params.knot == solver::case::KnotKind::Overhand;
+            async move {
+                if overhand {
+                    self.simplified_snap(params.n, params.h).await
+                } else {
+                    None
+                }
+            }
+        }))
         .await;
         Ok(PhaseDiagram::new(&record, &cases, base, simplified)?)
     }

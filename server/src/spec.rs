@@ -57,8 +57,8 @@ pub struct SweepSpec {
     /// Display name (at most 200 characters).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
-    /// A preset name: `fig7`, `fig9`, `fig11`, `hysteresis`, `twist` or
-    /// `materials` (see `GET /api/presets`).
+    /// A preset name: `fig7`, `fig9`, `fig11`, `hysteresis`, `twist`,
+    /// `knots` or `materials` (see `GET /api/presets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preset: Option<String>,
     /// Case parameters common to every case (a partial `CaseParams`).
@@ -197,6 +197,22 @@ pub fn presets() -> Vec<Preset> {
             [-2.0, -1.0, 0.0, 1.0, 2.0].map(turns).to_vec(),
         ),
         make(
+            "knots",
+            "Knots beyond the overhand: the overhand knot with n = 1 ... 4, the figure-eight and the closures of \
+             the braids s1^3 (the trefoil, tied otherwise than the overhand n = 1) and s1^3 s2 s1^-1 s2 (5_2), \
+             pulled tight (h = 1.6 mm, mu = 0.1)",
+            serde_json::json!({"h": 1.6e-3, "mu": 0.1}),
+            KNOT_AXIS,
+            (1..=4)
+                .map(|n| serde_json::json!({"knot": "overhand", "n": n}))
+                .chain([
+                    serde_json::json!("figure_eight"),
+                    serde_json::json!({"knot": "braid", "braid_word": "s1 s1 s1"}),
+                    serde_json::json!({"knot": "braid", "braid_word": "s1^3 s2 s1^-1 s2"}),
+                ])
+                .collect(),
+        ),
+        make(
             "materials",
             "Inversion does not depend on E or rho (paper Sec. 4): one knot (n = 3, h = 1.6 mm, L = 1 m, mu = 0.1) \
              in rubber, silicone, nylon, nitinol and steel (nu changes the twisting stiffness GJ/EI = 1/(1 + nu))",
@@ -210,6 +226,15 @@ pub fn presets() -> Vec<Preset> {
     ]
 }
 
+/// The knot axis: each value a knot word (`"figure_eight"`) or an object of
+/// the Knot group's parameters that pick a knot (`{"knot": "overhand", "n":
+/// 2}`, `{"knot": "braid", "braid_word": "s1 s1 s1"}`), so that one axis
+/// lists knots of different families.
+pub const KNOT_AXIS: &str = "knot";
+
+/// The parameters a knot-axis object may set.
+const KNOT_FIELDS: [&str; 3] = ["knot", "n", "braid_word"];
+
 /// A grid axis that is not a parameter: a named material
 /// (`solver::case::MATERIALS`), setting `youngs_modulus`, `density` and
 /// `poisson_ratio` together.
@@ -218,6 +243,9 @@ pub const MATERIAL_AXIS: &str = "material";
 /// The parameters a grid value of `axis` sets: the value itself, or a named
 /// material's three constants.
 fn axis_values(axis: &str, value: &Value) -> Vec<(String, Value)> {
+    if let (KNOT_AXIS, Value::Object(knot)) = (axis, value) {
+        return knot.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+    }
     match (axis, value.as_str().and_then(solver::case::material)) {
         (MATERIAL_AXIS, Some(m)) => vec![
             ("youngs_modulus".to_string(), Value::from(m.youngs_modulus)),
@@ -443,7 +471,16 @@ fn check_grid(
                     format!("duplicate value {v}"),
                 ));
             }
-            if let Some(reason) = solver::case::type_error(axis, v) {
+            if let (KNOT_AXIS, Value::Object(knot)) = (axis.as_str(), v) {
+                let at = format!("grid.{axis}[{i}]");
+                for name in knot.keys().filter(|k| !KNOT_FIELDS.contains(&k.as_str())) {
+                    errors.push(FieldError::new(
+                        format!("{at}.{name}"),
+                        format!("a knot of the grid sets only {}", KNOT_FIELDS.join(", ")),
+                    ));
+                }
+                errors.extend(check_object(&at, knot));
+            } else if let Some(reason) = solver::case::type_error(axis, v) {
                 errors.push(FieldError::new(format!("grid.{axis}[{i}]"), reason));
             }
         }

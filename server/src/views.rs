@@ -198,6 +198,9 @@ pub struct SubmitResponse {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct PhasePoint {
     pub case_id: i64,
+    /// The knot the case ties: `"overhand n = 3"`, `"figure_eight"`,
+    /// `"braid s1 s1 s1"`.
+    pub knot: String,
     /// The varied parameters' values (e.g. `{"h": 0.0016}`).
     #[schema(value_type = BTreeMap<String, Object>)]
     pub params: BTreeMap<String, Value>,
@@ -521,9 +524,13 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
     }
 }
 
-/// A case's value of the grid axis `name`: its parameter, or for the
-/// material axis the named material whose constants it has.
+/// A case's value of the grid axis `name`: its parameter, for the material
+/// axis the named material whose constants it has, for the knot axis the
+/// knot's label (`"overhand n = 2"`).
 fn varied_value(name: &str, params: &solver::case::CaseParams, json: &Value) -> Value {
+    if name == crate::spec::KNOT_AXIS {
+        return Value::from(params.knot_label());
+    }
     if name == crate::spec::MATERIAL_AXIS {
         let found = solver::case::MATERIALS.iter().find(|m| {
             (m.youngs_modulus, m.density, m.poisson_ratio)
@@ -796,6 +803,7 @@ impl PhaseDiagram {
                     let c = SweepCaseView::from((point.case, &record.varied[..]));
                     PhasePoint {
                         case_id: c.case_id,
+                        knot: point.case.case.params.knot_label(),
                         params: c.params,
                         status: c.status,
                         inversion: c.inversion,

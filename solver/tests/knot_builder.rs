@@ -1,12 +1,14 @@
-//! Overhand-knot builder and topology check (paper Sec. 2, 4): knot
-//! determinants of standard knots from their textbook parametrisations, and
-//! the geometry and topology of the built knots.
+//! The knot catalog's builders and topology checks (paper Sec. 2, 4): knot
+//! determinants and Alexander polynomials of standard knots from their
+//! textbook parametrisations, and the geometry and topology of the built
+//! knots (overhand, figure-eight, braid closures).
 use nalgebra::{Rotation3, Unit, Vector3};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use solver::knot::{
-    KnotError, KnotShape, KnotSpec, TopologyError, build, close_open_curve, closed_knot_determinant,
-    determinant_along, expected_determinant, knot_determinant,
+    BraidSpec, BraidWord, Family, FigureEightSpec, KnotError, KnotShape, KnotSpec, TopologyError, alexander,
+    alexander_along, build, close_open_curve, closed_alexander, closed_knot_determinant, determinant_along,
+    expected_determinant, knot_determinant,
 };
 use std::f64::consts::PI;
 use std::time::{Duration, Instant};
@@ -166,6 +168,136 @@ fn determinant_is_invariant_under_rotations_and_projection_directions() {
             );
         }
     }
+}
+
+/// Alexander polynomials of the knot tables (lowest power first): the
+/// torus knots' `(t^pq - 1)(t - 1) / ((t^p - 1)(t^q - 1))`.
+fn table_polynomial(name: &str) -> Vec<i64> {
+    match name {
+        "circle" | "crumpled unknot" => vec![1],
+        "trefoil 3_1" | "T(2,3) = 3_1" => vec![1, -1, 1],
+        "figure-eight 4_1" => vec![1, -3, 1],
+        "T(2,5) = 5_1" => vec![1, -1, 1, -1, 1],
+        "T(2,7) = 7_1" => vec![1, -1, 1, -1, 1, -1, 1],
+        "T(3,4) = 8_19" => vec![1, -1, 0, 1, 0, -1, 1],
+        "T(3,5) = 10_124" => vec![1, -1, 0, 1, -1, 1, 0, -1, 1],
+        other => panic!("no table entry for {other}"),
+    }
+}
+
+/// The polynomial tells 4_1 from 5_1 (both of determinant 5) and 10_124
+/// from the unknot (both 1), whatever the rotation, projection or opening.
+#[test]
+fn standard_knots_have_their_table_alexander_polynomials() {
+    let mut rng = StdRng::seed_from_u64(5);
+    for (name, curve, det) in standard_knots() {
+        let want = table_polynomial(name);
+        let got = closed_alexander(&curve).unwrap();
+        assert_eq!(got.coefficients(), want, "{name}");
+        assert_eq!(got.determinant(), det, "{name}: |Delta(-1)| is the determinant");
+        for _ in 0..4 {
+            let rotation = random_rotation(&mut rng);
+            let rotated: Curve = curve.iter().map(|p| rotation * p).collect();
+            let opened = alexander(&open_on_axis(&rotated)).unwrap();
+            assert_eq!(opened.coefficients(), want, "{name} rotated, opened");
+            let direction = random_direction(&mut rng);
+            match alexander_along(&curve, &direction) {
+                Ok(p) => assert_eq!(p.coefficients(), want, "{name} along {direction:?}"),
+                Err(e) => assert_eq!(e, TopologyError::DegenerateProjection, "{name}"),
+            }
+        }
+    }
+}
+
+/// The built overhand knot with n passes carries the (2, 2n + 1) torus
+/// knot's polynomial, `1 - t + ... + t^2n`, and the family says so.
+#[test]
+fn overhand_knots_carry_the_torus_knots_polynomial() {
+    for n in 1..=4 {
+        let spec = KnotSpec::paper(n);
+        let want: Vec<i64> = (0..=2 * n).map(|k| if k % 2 == 0 { 1 } else { -1 }).collect();
+        assert_eq!(spec.alexander().coefficients(), want, "n = {n}");
+        let shape = build(&spec).unwrap();
+        assert_eq!(alexander(&shape.points).unwrap().coefficients(), want, "n = {n}");
+    }
+}
+
+/// Braid closures tied in a rod: `s1 s1 s1` is the trefoil, `s1 s2^-1 s1
+/// s2^-1` the figure-eight (as the figure-eight family ties it), `s1^3 s2
+/// s1^-1 s2` the knot `5_2` and `s1 s2 s1 s2 s1 s2 s1 s2` the (3, 4) torus
+/// knot `8_19`; each shape is loose and
+/// contact-free with equal edges, its ends on the pulling axis, and keeps
+/// its polynomial under random rotations.
+#[test]
+fn braid_closures_tie_their_knots() {
+    let (length, nodes, radius) = (1.0, 301, 1.6e-3);
+    let braid = |word: &str| BraidSpec {
+        word: BraidWord::parse(word).unwrap(),
+        length,
+        nodes,
+        radius,
+    };
+    let figure_eight = FigureEightSpec {
+        length,
+        nodes,
+        radius,
+    };
+    let cases: Vec<(Box<dyn Family>, Vec<i64>)> = vec![
+        (Box::new(braid("s1 s1 s1")), vec![1, -1, 1]),
+        (Box::new(braid("s1 s2^-1 s1 s2^-1")), vec![1, -3, 1]),
+        (Box::new(figure_eight), vec![1, -3, 1]),
+        (Box::new(braid("s1^3 s2 s1^-1 s2")), vec![2, -3, 2]),
+        (
+            Box::new(braid("s1 s2 s1 s2 s1 s2 s1 s2")),
+            vec![1, -1, 0, 1, 0, -1, 1],
+        ),
+    ];
+    let mut rng = StdRng::seed_from_u64(17);
+    for (family, want) in cases {
+        assert_eq!(family.alexander().coefficients(), want);
+        let shape = family.tie().unwrap();
+        let points = shape.points();
+        assert_eq!(points.len(), nodes);
+        let edge = length / (nodes - 1) as f64;
+        assert!(
+            points
+                .windows(2)
+                .all(|w| ((w[1] - w[0]).norm() - edge).abs() < 1e-9 * edge)
+        );
+        let (first, last) = (points[0], points[nodes - 1]);
+        assert!(first.y.abs() + first.z.abs() + last.y.abs() + last.z.abs() < 1e-12);
+        assert!(
+            points.iter().all(|p| p.x >= first.x && p.x <= last.x),
+            "every node between the clamps"
+        );
+        assert!(min_non_neighbour_distance(points, radius, edge) >= 2.0 * radius);
+        assert_eq!(alexander(points).unwrap().coefficients(), want);
+        for _ in 0..4 {
+            let rotation = random_rotation(&mut rng);
+            let rotated: Curve = points.iter().map(|p| rotation * p).collect();
+            assert_eq!(alexander(&rotated).unwrap().coefficients(), want, "rotated");
+        }
+    }
+}
+
+/// A rod too short or too coarse for a braid's knot is refused, saying
+/// what it needs.
+#[test]
+fn braid_knots_need_room_and_nodes() {
+    let spec = BraidSpec {
+        word: BraidWord::parse("s1 s2 s3 s4 s1 s2 s3 s4").unwrap(),
+        length: 0.4,
+        nodes: 301,
+        radius: 1.6e-3,
+    };
+    assert!(matches!(spec.tie(), Err(KnotError::RodTooShort { .. })));
+    let coarse = BraidSpec {
+        word: BraidWord::parse("s1^3").unwrap(),
+        length: 1.0,
+        nodes: 101,
+        radius: 1.6e-3,
+    };
+    assert!(matches!(coarse.tie(), Err(KnotError::TooFewNodes { min, .. }) if min > 250));
 }
 
 #[test]

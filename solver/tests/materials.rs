@@ -79,7 +79,7 @@ fn a_thin_rods_knot_is_the_papers_in_radii() {
     let paper = CaseParams::default().validated().unwrap();
     let case = thin.validated().unwrap();
     let l_k_bar = |c: &solver::case::ValidCase| {
-        let p = &c.start().points;
+        let p = c.start().points();
         (c.params().length - (p[p.len() - 1] - p[0]).norm()) / c.params().h
     };
     assert!(

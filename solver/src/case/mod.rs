@@ -10,7 +10,7 @@ mod scales;
 mod table;
 
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
-use crate::knot::{KnotSpec, StartShape};
+use crate::knot::{Knot, KnotSpec, StartShape};
 use crate::words::display_as_word;
 pub use loading::{Direction, Ends, Hold, LoadStage, Rotate, Soft, Target, default_program};
 pub use materials::{MATERIALS, NamedMaterial, material};
@@ -47,7 +47,21 @@ pub enum Protocol {
     Adaptive,
 }
 
-display_as_word!(Protocol);
+display_as_word!(Protocol, KnotKind);
+
+/// Which knot of the catalog a case ties (case parameter `knot`,
+/// [`crate::knot`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KnotKind {
+    /// The overhand knot with `n` passes (the paper's).
+    #[default]
+    Overhand,
+    /// The figure-eight knot.
+    FigureEight,
+    /// The closure of `braid_word`.
+    Braid,
+}
 
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;
@@ -79,7 +93,7 @@ impl ValidCase {
 /// The knots built so far in one validation pass, by spec, with the
 /// builder's refusal if it refused ([`CaseParams::validate_in`]).
 #[derive(Debug, Default)]
-pub struct BuildChecks(Vec<(KnotSpec, Result<f64, ParamError>)>);
+pub struct BuildChecks(Vec<(Knot, Result<f64, ParamError>)>);
 
 /// A parameter outside its documented range.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
@@ -118,12 +132,12 @@ impl CaseParams {
             let shape = self.start_shape().map_err(|e| vec![e])?;
             return self.loading_error(&shape).map_or(Ok(()), |e| Err(vec![e]));
         } else {
-            let spec = self.knot_spec();
-            match checks.0.iter().find(|(s, _)| *s == spec) {
+            let knot = self.knot().map_err(|e| vec![e])?;
+            match checks.0.iter().find(|(k, _)| *k == knot) {
                 Some((_, outcome)) => outcome.clone(),
                 None => {
                     let outcome = self.start_shape().map(|s| self.l_k_bar_of(&s));
-                    checks.0.push((spec, outcome.clone()));
+                    checks.0.push((knot, outcome.clone()));
                     outcome
                 }
             }
@@ -155,13 +169,15 @@ impl CaseParams {
 
     /// l_k bar of a start shape (eq. 11).
     fn l_k_bar_of(&self, start: &StartShape) -> f64 {
-        let span = start.points[start.points.len() - 1] - start.points[0];
+        let points = start.points();
+        let span = points[points.len() - 1] - points[0];
         (self.length - span.norm()) / self.h
     }
 
     /// Why the loading program cannot run from `start`, if it cannot.
     fn loading_error(&self, start: &StartShape) -> Option<ParamError> {
-        let span = start.points[start.points.len() - 1] - start.points[0];
+        let points = start.points();
+        let span = points[points.len() - 1] - points[0];
         let along_x = span.y.abs().max(span.z.abs()) <= 1e-9 * span.norm();
         self.program_error(self.l_k_bar_of(start), along_x)
     }
@@ -195,7 +211,7 @@ impl CaseParams {
         PARAMETERS.iter().filter_map(|p| p.check(self)).collect()
     }
 
-    /// The knot builder's input for this case.
+    /// The overhand knot builder's input for this case (its `n` and shape).
     pub fn knot_spec(&self) -> KnotSpec {
         KnotSpec {
             n: self.n,
@@ -363,14 +379,14 @@ mod tests {
     #[test]
     fn initial_shape_is_checked_like_a_built_knot() {
         let built = CaseParams::default().start_shape().unwrap();
-        let points: Vec<[f64; 3]> = built.points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let points: Vec<[f64; 3]> = built.points().iter().map(|p| [p.x, p.y, p.z]).collect();
         let with = |pts: Vec<[f64; 3]>| CaseParams {
             initial_shape: Some(pts),
             ..CaseParams::default()
         };
         let ok = with(points.clone());
         assert!(ok.validate().is_ok(), "{:?}", ok.validate());
-        assert_eq!(ok.start_shape().unwrap().points, built.points);
+        assert_eq!(ok.start_shape().unwrap().points(), built.points());
         let reason = |p: CaseParams| {
             let errors = p.validate().unwrap_err();
             assert_eq!(errors[0].field, "initial_shape");
@@ -402,15 +418,18 @@ mod tests {
         let (i, j) = (0..points.len())
             .flat_map(|i| (i + 10..points.len()).map(move |j| (i, j)))
             .min_by(|a, b| {
-                let d = |(i, j): (usize, usize)| (built.points[i] - built.points[j]).norm();
+                let d = |(i, j): (usize, usize)| (built.points()[i] - built.points()[j]).norm();
                 d(*a).total_cmp(&d(*b))
             })
             .unwrap();
-        let towards = (built.points[j] - built.points[i]).normalize() * CaseParams::default().h;
-        close[i] = (built.points[i] + towards).into();
+        let towards = (built.points()[j] - built.points()[i]).normalize() * CaseParams::default().h;
+        close[i] = (built.points()[i] + towards).into();
         assert!(reason(with(close)).contains("closer than 2h"));
         let wrong_n = CaseParams { n: 2, ..with(points) };
-        assert!(reason(wrong_n).contains("knot determinant 7, but an overhand knot with n = 2 passes has 5"));
+        assert!(reason(wrong_n).contains(
+            "Alexander polynomial t^6 - t^5 + t^4 - t^3 + t^2 - t + 1, but the overhand knot with n = 2 passes \
+             has t^4 - t^3 + t^2 - t + 1"
+        ));
     }
 
     #[test]

@@ -2,18 +2,26 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FrictionLaw, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol,
+    Candidates, ContactSolve, FrictionLaw, KnotKind, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError,
+    Protocol,
 };
-use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
+use crate::knot::{
+    self, BraidSpec, BraidWord, Family, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
+    StartShape,
+};
 use serde::{Deserialize, Serialize};
 
-/// Parameters of one overhand-knot tightening case, SI units; [`PARAMETERS`]
+/// Parameters of one knot-tightening case, SI units; [`PARAMETERS`]
 /// documents every field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CaseParams {
-    /// Passes n.
+    /// The knot of the catalog.
+    pub knot: KnotKind,
+    /// Passes n of the overhand knot.
     pub n: u32,
+    /// The braid word of a braid knot.
+    pub braid_word: Option<String>,
     /// Rod radius h (m).
     pub h: f64,
     /// Friction coefficient mu.
@@ -79,7 +87,9 @@ pub struct CaseParams {
 impl Default for CaseParams {
     fn default() -> Self {
         Self {
+            knot: KnotKind::Overhand,
             n: 3,
+            braid_word: None,
             h: 1.6e-3,
             mu: 0.1,
             friction_law: FrictionLaw::default(),
@@ -121,6 +131,21 @@ const fn closed(lo: f64, hi: f64) -> Range {
 /// Every `CaseParams` field, documented once.
 pub const PARAMETERS: &[Parameter] = &[
     Parameter {
+        name: "knot",
+        group: Group::Knot,
+        unit: "",
+        default: "\"overhand\"",
+        range: Range::Words(&["overhand", "figure_eight", "braid"]),
+        null: None,
+        paper: "\"overhand\"",
+        doc: "The knot tied in the rod: \"overhand\" with n passes (the paper's), \"figure_eight\" (4_1) or \
+              \"braid\", the closure of braid_word opened into a long knot. Each is tied loose and contact-free, \
+              clamped at both ends and pulled apart; its Alexander polynomial is checked on the start shape and \
+              at the end and reported (alexander_initial, alexander_final: coefficients, lowest power first), and \
+              the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot).",
+        value: UNCHECKED,
+    },
+    Parameter {
         name: "n",
         group: Group::Knot,
         unit: "",
@@ -128,8 +153,22 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::Integers(1, MAX_PASSES as u64),
         null: None,
         paper: "",
-        doc: "Number of passes (unknotting number) of the overhand knot.",
+        doc: "Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).",
         value: |p| Some(Value::Integer(u64::from(p.n))),
+    },
+    Parameter {
+        name: "braid_word",
+        group: Group::Knot,
+        unit: "",
+        default: "null",
+        range: Range::BraidWord,
+        null: Some("no braid: for every knot but \"braid\""),
+        paper: "",
+        doc: "The braid whose closure knot \"braid\" ties: generators s1 ... s4 (s_i crosses strands i and i + 1, \
+              the one moving up passing over; s_i^-1 the mirror crossing), each with an optional power such as \
+              s2^-1 or s1^3, separated by spaces; at most 5 strands and 64 letters, and the closure must be a \
+              knot (one component). \"s1 s1 s1\" is the trefoil, \"s1 s2^-1 s1 s2^-1\" the figure-eight.",
+        value: UNCHECKED,
     },
     Parameter {
         name: "h",
@@ -442,7 +481,7 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(1.0)),
         null: Some("the knot builder's default for n"),
         paper: "",
-        doc: "Initial clamp-to-clamp distance.",
+        doc: "Initial clamp-to-clamp distance of the overhand knot.",
         value: |p| p.end_to_end.map(Value::Number),
     },
     Parameter {
@@ -453,7 +492,7 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(2.0)),
         null: Some("the knot builder's default"),
         paper: "",
-        doc: "Strand length of a braid pass in the initial shape.",
+        doc: "Strand length of a braid pass in the overhand knot's initial shape.",
         value: |p| p.braid_length.map(Value::Number),
     },
     Parameter {
@@ -510,8 +549,8 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "",
         doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
-              points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass \
-              overhand knot. Mind the request body limit (GET /api/limits).",
+              points), no two non-neighbouring segments closer than 2h, and carry the Alexander polynomial of the \
+              knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
     Parameter {
@@ -545,7 +584,13 @@ impl CaseParams {
             "h"
         };
         let field = match &e {
-            KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => "n",
+            KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => match self.knot {
+                KnotKind::Overhand => "n",
+                KnotKind::FigureEight => "knot",
+                KnotKind::Braid => "braid_word",
+            },
+            KnotError::Braid(_) => "braid_word",
+            KnotError::RodTooShort { .. } => "length",
             KnotError::InvalidParameter { name, .. } => match *name {
                 "radius" => "h",
                 "clamp_span" => "end_to_end",
@@ -578,13 +623,86 @@ impl CaseParams {
     /// itself, so that a case accepted by [`CaseParams::validate`] can always
     /// start); a failure names the parameter to change.
     pub(super) fn start_shape(&self) -> Result<StartShape, ParamError> {
+        let knot = self.knot()?;
         match &self.initial_shape {
-            Some(points) => knot::checked_start(&self.knot_spec(), points).map_err(|reason| ParamError {
-                field: "initial_shape".to_string(),
-                reason,
-            }),
-            None => knot::built_start(&self.knot_spec()).map_err(|e| self.knot_error(e)),
+            Some(points) => {
+                let rod = (self.length, self.node_count(), self.h);
+                knot::checked_start(points, rod, &knot.name(), &knot.alexander()).map_err(|reason| {
+                    ParamError {
+                        field: "initial_shape".to_string(),
+                        reason,
+                    }
+                })
+            }
+            None => knot.tie().map_err(|e| self.knot_error(e)),
         }
+    }
+
+    /// The knot in a few words: `"overhand n = 3"`, `"figure_eight"`,
+    /// `"braid s1 s1 s1"` (the word as given).
+    pub fn knot_label(&self) -> String {
+        match (self.knot, &self.braid_word) {
+            (KnotKind::Overhand, _) => format!("overhand n = {}", self.n),
+            (KnotKind::Braid, Some(word)) => format!("braid {}", word.trim()),
+            (kind, _) => kind.to_string(),
+        }
+    }
+
+    /// The knot of the catalog this case ties; a parameter that does not
+    /// belong to the chosen knot, or a refused braid word, is named.
+    pub fn knot(&self) -> Result<Knot, ParamError> {
+        let refuse = |field: &str, reason: String| ParamError {
+            field: field.to_string(),
+            reason,
+        };
+        let kind = self.knot;
+        if kind != KnotKind::Overhand {
+            let default = CaseParams::default();
+            let overhand_only = [
+                ("n", self.n != default.n),
+                ("end_to_end", self.end_to_end.is_some()),
+                ("braid_length", self.braid_length.is_some()),
+            ];
+            if let Some((field, _)) = overhand_only.into_iter().find(|(_, given)| *given) {
+                return Err(refuse(
+                    field,
+                    format!("{field} shapes the overhand knot; knot \"{kind}\" has none: leave it out"),
+                ));
+            }
+        }
+        let word = match (kind, &self.braid_word) {
+            (KnotKind::Braid, None) => {
+                return Err(refuse(
+                    "braid_word",
+                    "knot \"braid\" needs a braid word, e.g. \"s1 s2^-1 s1 s2^-1\"".to_string(),
+                ));
+            }
+            (KnotKind::Braid, Some(text)) => {
+                Some(BraidWord::parse(text).map_err(|e| refuse("braid_word", e.to_string()))?)
+            }
+            (_, Some(_)) => {
+                return Err(refuse(
+                    "braid_word",
+                    format!("only knot \"braid\" reads a braid word; knot is \"{kind}\""),
+                ));
+            }
+            (_, None) => None,
+        };
+        let (length, nodes, radius) = (self.length, self.node_count(), self.h);
+        Ok(match (kind, word) {
+            (KnotKind::Overhand, _) => Knot::Overhand(self.knot_spec()),
+            (KnotKind::FigureEight, _) => Knot::FigureEight(FigureEightSpec {
+                length,
+                nodes,
+                radius,
+            }),
+            (KnotKind::Braid, word) => Knot::Braid(BraidSpec {
+                word: word.expect("read above"),
+                length,
+                nodes,
+                radius,
+            }),
+        })
     }
 }
 

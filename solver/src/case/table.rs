@@ -89,6 +89,8 @@ pub enum Range {
     /// A loading program ([`super::LoadStage`]), checked against the start
     /// shape.
     Program,
+    /// A braid word ([`crate::knot::BraidWord`]), checked with the knot.
+    BraidWord,
 }
 
 /// One end of an interval.
@@ -124,6 +126,9 @@ impl Parameter {
                 .collect::<Vec<_>>()
                 .join(" or "),
             Range::Points => "K = nodes points [x, y, z]".to_string(),
+            Range::BraidWord => {
+                "a braid word such as \"s1 s2^-1 s1 s2^-1\" (generators s1 ... s4)".to_string()
+            }
             Range::Program => format!(
                 "a list of at most {} stages, each {{\"pull\" | \"release\" | \"hold\" | \"rotate\" | \"soft\": {{...}}}}",
                 super::loading::MAX_STAGES

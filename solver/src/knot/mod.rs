@@ -1,19 +1,178 @@
-//! Overhand knots (paper Sec. 2 and 4): the builder of the initial centreline,
-//! the check of a user's start shape and the topology check (knot determinant
-//! of the closed curve).
-mod builder;
-mod geometry;
+//! The knot catalog: one file per family, each behind [`Family`] (a spec
+//! that ties its knot in a rod and names the invariant the knot keeps), and
+//! the checks every family shares.
+//!
+//! - [`overhand`]: the overhand knot with `n` passes (paper Sec. 2 and 4);
+//! - [`figure_eight`]: the figure-eight knot `4_1`;
+//! - [`braid`]: the closure of any braid word on at most 5 strands.
+//!
+//! A family's knot is a [`StartShape`]: its rods' centre lines with the
+//! clamped ends (one rod, clamped and pulled at both ends, for every family
+//! so far) and its Alexander polynomial ([`alexander`]), which the builder
+//! checks on the shape it ties and the run on the shape at the end.
+//! [`topology`] gives the cheaper knot determinant `|Delta(-1)|` checked at
+//! every sample; [`twist`] the writhe and the start twist.
+mod alexander;
+pub mod braid;
+pub mod figure_eight;
+pub mod overhand;
+mod polyline;
 mod start;
 pub mod topology;
 mod twist;
 
-pub use builder::{
-    BRAID_MARGIN, KNOT_RADII, KnotError, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO,
-    MIN_BEND, MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
+pub use alexander::{Alexander, alexander, alexander_along, closed_alexander};
+pub use braid::{BraidError, BraidSpec, BraidWord};
+pub use figure_eight::FigureEightSpec;
+pub use overhand::{
+    BRAID_MARGIN, KNOT_RADII, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
+    MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
-pub use start::{StartShape, built_start, checked_start};
+pub use start::checked_start;
 pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
     knot_determinant,
 };
 pub use twist::{paper_twist, writhe, writhe_change};
+
+use crate::rod::End;
+use nalgebra::Vector3;
+use thiserror::Error;
+
+/// A family of knots: a spec that ties its knot.
+pub trait Family {
+    /// The Alexander polynomial of the (long) knot it ties, from theory or
+    /// algebra, not from its shape.
+    fn alexander(&self) -> Alexander;
+
+    /// A loose, contact-free start shape, checked to carry [`Family::alexander`].
+    fn tie(&self) -> Result<StartShape, KnotError>;
+
+    /// The twist (turns) the knot starts with when the case gives none, for
+    /// a start shape of writhe `writhe`.
+    fn twist(&self, writhe: f64) -> f64;
+}
+
+/// A knot of the catalog, ready to tie.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Knot {
+    Overhand(KnotSpec),
+    FigureEight(FigureEightSpec),
+    Braid(BraidSpec),
+}
+
+impl Knot {
+    fn family(&self) -> &dyn Family {
+        match self {
+            Knot::Overhand(spec) => spec,
+            Knot::FigureEight(spec) => spec,
+            Knot::Braid(spec) => spec,
+        }
+    }
+
+    /// The knot in words: "the overhand knot with n = 3 passes".
+    pub fn name(&self) -> String {
+        match self {
+            Knot::Overhand(spec) => format!("the overhand knot with n = {} passes", spec.n),
+            Knot::FigureEight(_) => "the figure-eight knot".to_string(),
+            Knot::Braid(spec) => format!("the closure of the braid {}", spec.word),
+        }
+    }
+}
+
+impl Family for Knot {
+    fn alexander(&self) -> Alexander {
+        self.family().alexander()
+    }
+
+    fn tie(&self) -> Result<StartShape, KnotError> {
+        self.family().tie()
+    }
+
+    fn twist(&self, writhe: f64) -> f64 {
+        self.family().twist(writhe)
+    }
+}
+
+/// The shape a case starts from: a family's knot, or a user's points
+/// checked like one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StartShape {
+    /// Centre line of each rod (one so far).
+    pub rods: Vec<Vec<Vector3<f64>>>,
+    /// A node of rod 0 in the middle of the knot's loop (where the braid
+    /// search starts).
+    pub loop_middle: usize,
+    /// The knot's Alexander polynomial, which it must keep.
+    pub alexander: Alexander,
+}
+
+impl StartShape {
+    /// The one rod's centre line.
+    pub fn points(&self) -> &[Vector3<f64>] {
+        &self.rods[0]
+    }
+
+    /// The clamped ends, each pulled away from the other along the line
+    /// joining them: both ends of each rod.
+    pub fn clamps(&self) -> impl Iterator<Item = (usize, End)> + '_ {
+        (0..self.rods.len()).flat_map(|rod| [(rod, End::Start), (rod, End::Finish)])
+    }
+}
+
+/// Why a knot could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum KnotError {
+    #[error("number of passes n = {0} must be in 1..=8")]
+    Passes(u32),
+    #[error("{name} = {value} must be finite and positive")]
+    InvalidParameter { name: &'static str, value: f64 },
+    #[error("radius h = {radius} m is too large: the rod length requires h < L/50 = {max} m")]
+    RadiusTooLarge { radius: f64, max: f64 },
+    #[error(
+        "{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}"
+    )]
+    TooFewNodes { nodes: usize, min: usize },
+    #[error(
+        "braid strand length {pass_length} m is too short for 2n+1 half twists of radius h: need {min} m"
+    )]
+    BraidTooShort { pass_length: f64, min: f64 },
+    #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
+    TailsTooShort { tail_length: f64, min: f64 },
+    #[error(
+        "no valid shape with braid passes of {pass_length} m, a loop of {loop_length} m and tails of \
+         {tail_length} m: the loop cannot close around the braid, or the tails cannot reach the axis, \
+         with bend radii of at least 3 helix radii"
+    )]
+    Infeasible {
+        pass_length: f64,
+        loop_length: f64,
+        tail_length: f64,
+    },
+    #[error("end-to-end distance {clamp_span} m is outside the feasible range [{min}, {max}] m")]
+    EndToEndOutOfRange { clamp_span: f64, min: f64, max: f64 },
+    #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
+    Clearance { distance: f64, required: f64 },
+    #[error("topology check failed: {0}")]
+    Topology(#[from] TopologyError),
+    #[error("the built curve's Alexander polynomial is {got}, expected {expected}")]
+    WrongKnot { got: Alexander, expected: Alexander },
+    #[error("{0}")]
+    Braid(#[from] BraidError),
+    #[error(
+        "the knot needs a rod of at least {needed:.4} m (its return paths and tails reaching past them), got L = {length} m"
+    )]
+    RodTooShort { needed: f64, length: f64 },
+}
+
+/// Fails unless the long knot `points` has the Alexander polynomial `expected`.
+fn check_knot(points: &[Vector3<f64>], expected: &Alexander) -> Result<(), KnotError> {
+    let got = alexander(points)?;
+    if got != *expected {
+        return Err(KnotError::WrongKnot {
+            got,
+            expected: expected.clone(),
+        });
+    }
+    Ok(())
+}

@@ -1,38 +1,26 @@
-//! The shape a case starts from: the builder's knot, or a user's points
-//! checked like one.
-use super::builder::{KnotError, KnotShape, KnotSpec, build};
-use super::topology::{expected_determinant, knot_determinant};
+//! A user's start shape, checked like a built knot.
+use super::StartShape;
+use super::alexander::{Alexander, alexander};
 use crate::contact::broad_phase::neighbour_gap;
 use crate::contact::segment::closest_points;
 use nalgebra::Vector3;
 
-/// The shape a case starts from.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StartShape {
-    pub points: Vec<Vector3<f64>>,
-    /// A node in the middle of the knot's loop (where the braid search starts).
-    pub loop_middle: usize,
-}
-
-/// The builder's knot for `spec`, with the middle of its loop.
-pub fn built_start(spec: &KnotSpec) -> Result<StartShape, KnotError> {
-    build(spec).map(|shape: KnotShape| StartShape {
-        loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
-        points: shape.points,
-    })
-}
-
-/// A user's start shape for `spec` (its `n`, `length`, `nodes` and `radius`
-/// h): `nodes` finite points, a polyline of length `length` (within 1 %),
-/// every node between the two ends along the line joining them (the clamps
-/// hold the ends), no two non-neighbouring segments closer than 2h, and the
-/// knot type of an n-pass overhand knot. The error is the reason, in words.
-pub fn checked_start(spec: &KnotSpec, points: &[[f64; 3]]) -> Result<StartShape, String> {
-    if points.len() != spec.nodes {
+/// A user's start shape for a rod of `length`, `nodes` and `radius` h
+/// tied in the knot `name` of Alexander polynomial `expected`: `nodes`
+/// finite points, a polyline of length `length` (within 1 %), every node
+/// between the two ends along the line joining them (the clamps hold the
+/// ends), no two non-neighbouring segments closer than 2h, and the knot's
+/// Alexander polynomial. The error is the reason, in words.
+pub fn checked_start(
+    points: &[[f64; 3]],
+    (length, nodes, radius): (f64, usize, f64),
+    name: &str,
+    expected: &Alexander,
+) -> Result<StartShape, String> {
+    if points.len() != nodes {
         return Err(format!(
-            "{} points, but nodes = {}: give one point per node",
-            points.len(),
-            spec.nodes
+            "{} points, but nodes = {nodes}: give one point per node",
+            points.len()
         ));
     }
     if let Some(i) = points.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
@@ -44,24 +32,20 @@ pub fn checked_start(spec: &KnotSpec, points: &[[f64; 3]]) -> Result<StartShape,
         return Err(format!("points {i} and {} coincide", i + 1));
     }
     let total: f64 = edges.iter().sum();
-    if (total - spec.length).abs() > 0.01 * spec.length {
+    if (total - length).abs() > 0.01 * length {
         return Err(format!(
-            "the polyline is {total:.4} m long, but length = {} m (within 1 %)",
-            spec.length
+            "the polyline is {total:.4} m long, but length = {length} m (within 1 %)"
         ));
     }
     check_between_ends(&points)?;
-    check_clearance(&points, &edges, spec.radius)?;
-    let expected = expected_determinant(spec.n);
-    match knot_determinant(&points) {
-        Ok(d) if d == expected => Ok(StartShape {
+    check_clearance(&points, &edges, radius)?;
+    match alexander(&points) {
+        Ok(got) if got == *expected => Ok(StartShape {
             loop_middle: points.len() / 2,
-            points,
+            rods: vec![points],
+            alexander: got,
         }),
-        Ok(d) => Err(format!(
-            "knot determinant {d}, but an overhand knot with n = {} passes has {expected}",
-            spec.n
-        )),
+        Ok(got) => Err(format!("Alexander polynomial {got}, but {name} has {expected}")),
         Err(e) => Err(format!("knot type undetermined: {e}")),
     }
 }

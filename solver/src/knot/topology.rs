@@ -26,7 +26,7 @@ pub const MAX_ATTEMPTS: usize = 16;
 const TOLERANCE: f64 = 1e-9;
 
 /// Two primes below `2^62`; the determinant is computed modulo each.
-const PRIMES: [u64; 2] = [(1 << 61) - 1, (1 << 62) - 57];
+pub(super) const PRIMES: [u64; 2] = [(1 << 61) - 1, (1 << 62) - 57];
 
 /// Why the determinant could not be computed.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -57,26 +57,55 @@ pub fn expected_determinant(n: u32) -> u64 {
 /// axis, closed as in [`close_open_curve`]; the projection starts from the
 /// normal of the best-fit plane of `points` (made perpendicular to the axis).
 pub fn knot_determinant(points: &[Vector3<f64>]) -> Result<u64, TopologyError> {
-    let (closed, direction) = closure(points)?;
-    search(&closed, &direction)
+    open_diagram(points, colouring_determinant)
 }
 
 /// Knot determinant of a closed polygon (the last point joins the first); the
 /// projection starts from the normal of the best-fit plane of `points`.
 pub fn closed_knot_determinant(points: &[Vector3<f64>]) -> Result<u64, TopologyError> {
-    validate(points, 3)?;
-    search(points, &best_fit_normal(points))
+    closed_diagram(points, colouring_determinant)
 }
 
-/// Knot determinant of a closed polygon from its projection along `direction`
-/// only; [`TopologyError::DegenerateProjection`] if that diagram is not generic.
-pub fn determinant_along(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Result<u64, TopologyError> {
+/// `invariant` of the first generic diagram of the open polyline `points`,
+/// closed as in [`close_open_curve`] (the projections of [`knot_determinant`]).
+pub(super) fn open_diagram<T>(
+    points: &[Vector3<f64>],
+    invariant: impl Fn(&[Crossing]) -> Result<T, TopologyError>,
+) -> Result<T, TopologyError> {
+    let (closed, direction) = closure(points)?;
+    search(&closed, &direction, invariant)
+}
+
+/// `invariant` of the first generic diagram of the closed polygon `points`
+/// (the projections of [`closed_knot_determinant`]).
+pub(super) fn closed_diagram<T>(
+    points: &[Vector3<f64>],
+    invariant: impl Fn(&[Crossing]) -> Result<T, TopologyError>,
+) -> Result<T, TopologyError> {
+    validate(points, 3)?;
+    search(points, &best_fit_normal(points), invariant)
+}
+
+/// `invariant` of the closed polygon's diagram along `direction` only;
+/// [`TopologyError::DegenerateProjection`] if that diagram is not generic.
+pub(super) fn diagram_along<T>(
+    points: &[Vector3<f64>],
+    direction: &Vector3<f64>,
+    invariant: impl Fn(&[Crossing]) -> Result<T, TopologyError>,
+) -> Result<T, TopologyError> {
     validate(points, 3)?;
     let norm = direction.norm();
     if !(norm.is_finite() && norm > 0.0) {
         return Err(TopologyError::InvalidDirection);
     }
-    diagram_determinant(points, &(direction / norm))?.ok_or(TopologyError::DegenerateProjection)
+    let crossings = crossings(points, &(direction / norm)).ok_or(TopologyError::DegenerateProjection)?;
+    invariant(&crossings)
+}
+
+/// Knot determinant of a closed polygon from its projection along `direction`
+/// only; [`TopologyError::DegenerateProjection`] if that diagram is not generic.
+pub fn determinant_along(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Result<u64, TopologyError> {
+    diagram_along(points, direction, colouring_determinant)
 }
 
 /// Closes an open polyline: with `m` the midpoint of the end nodes, `u` the unit
@@ -154,8 +183,12 @@ fn perpendicular(v: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// Tries `start` tilted by a fixed sequence of small angles until a diagram is
-/// generic.
-fn search(points: &[Vector3<f64>], start: &Vector3<f64>) -> Result<u64, TopologyError> {
+/// generic, and gives `invariant` of its crossings.
+fn search<T>(
+    points: &[Vector3<f64>],
+    start: &Vector3<f64>,
+    invariant: impl Fn(&[Crossing]) -> Result<T, TopologyError>,
+) -> Result<T, TopologyError> {
     let e1 = perpendicular(start);
     let e2 = start.cross(&e1);
     for k in 0..MAX_ATTEMPTS {
@@ -163,31 +196,29 @@ fn search(points: &[Vector3<f64>], start: &Vector3<f64>) -> Result<u64, Topology
         let azimuth = 0.5 + 2.399_963 * k as f64;
         let side = azimuth.cos() * e1 + azimuth.sin() * e2;
         let direction = tilt.cos() * start + tilt.sin() * side;
-        if let Some(det) = diagram_determinant(points, &direction)? {
-            return Ok(det);
+        if let Some(crossings) = crossings(points, &direction) {
+            return invariant(&crossings);
         }
     }
     Err(TopologyError::NoGenericProjection(MAX_ATTEMPTS))
 }
 
 /// One crossing: curve positions (segment index + parameter) of the over and
-/// under strands.
+/// under strands, and its sign (right-handed: the under strand passes from
+/// the over strand's right to its left, seen from the viewer).
 #[derive(Clone, Copy, Debug)]
-struct Crossing {
-    over: f64,
-    under: f64,
+pub(super) struct Crossing {
+    pub(super) over: f64,
+    pub(super) under: f64,
+    pub(super) positive: bool,
 }
 
-/// Determinant from the projection along the unit `direction`; `None` if the
-/// diagram is degenerate.
-fn diagram_determinant(
-    points: &[Vector3<f64>],
-    direction: &Vector3<f64>,
-) -> Result<Option<u64>, TopologyError> {
-    match crossings(points, direction) {
-        Some(crossings) => colouring_determinant(&crossings).map(Some),
-        None => Ok(None),
-    }
+/// The arc (0..c) through curve position `x` of a diagram whose under-passes
+/// are the sorted `unders`: arc k runs from the (k-1)-th to the k-th
+/// under-pass in curve order, so it is the number of under-passes before `x`,
+/// mod c.
+pub(super) fn arc_of(unders: &[f64], x: f64) -> usize {
+    unders.partition_point(|&u| u < x) % unders.len()
 }
 
 /// The crossings of the closed polygon projected along `direction`, or `None`
@@ -228,10 +259,22 @@ fn crossings(points: &[Vector3<f64>], direction: &Vector3<f64>) -> Option<Vec<Cr
                         return None;
                     }
                     let (pi, pj) = (i as f64 + t, j as f64 + s);
+                    let turn = (plane[(i + 1) % n] - plane[i]).perp(&(plane[(j + 1) % n] - plane[j]));
+                    // Viewed from +direction (the over strand nearer): the
+                    // under strand crosses from the over strand's right to
+                    // its left when turn(over, under) > 0.
                     found.push(if di > dj {
-                        Crossing { over: pi, under: pj }
+                        Crossing {
+                            over: pi,
+                            under: pj,
+                            positive: turn > 0.0,
+                        }
                     } else {
-                        Crossing { over: pj, under: pi }
+                        Crossing {
+                            over: pj,
+                            under: pi,
+                            positive: turn < 0.0,
+                        }
                     });
                 }
             }
@@ -286,16 +329,14 @@ fn segment_crossing(plane: &[Vector2<f64>], i: usize, j: usize) -> Intersection 
 }
 
 /// `|det|` of the colouring matrix with its last row and column removed.
-fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
+pub(super) fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
     let c = crossings.len();
     if c <= 1 {
         return Ok(1);
     }
-    // Arc k runs from the (k-1)-th to the k-th under-pass in curve order, so
-    // the arc through position x is the number of under-passes before x, mod c.
     let mut unders: Vec<f64> = crossings.iter().map(|x| x.under).collect();
     unders.sort_by(f64::total_cmp);
-    let arc = |x: f64| unders.partition_point(|&u| u < x) % c;
+    let arc = |x: f64| arc_of(&unders, x);
     let m = c - 1;
     let mut matrix = vec![0i64; m * m];
     for (row, crossing) in crossings.iter().take(m).enumerate() {
@@ -308,8 +349,14 @@ fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
         }
     }
     let residues = PRIMES.map(|p| det_mod(&matrix, m, p));
+    u64::try_from(recombine(residues).unsigned_abs()).map_err(|_| TopologyError::Overflow)
+}
+
+/// The integer `x`, `|x| < p0 p1 / 2`, with the given residues modulo
+/// [`PRIMES`] (Chinese remainder).
+pub(super) fn recombine(residues: [u64; 2]) -> i128 {
     let (p0, p1) = (u128::from(PRIMES[0]), u128::from(PRIMES[1]));
-    // Chinese remainder: x = r0 + p0 * ((r1 - r0) / p0 mod p1), 0 <= x < p0 p1.
+    // x = r0 + p0 * ((r1 - r0) / p0 mod p1), 0 <= x < p0 p1.
     let r0 = u128::from(residues[0]);
     let diff = (u128::from(residues[1]) + p1 - r0 % p1) % p1;
     let k = mul_mod(
@@ -319,15 +366,18 @@ fn colouring_determinant(crossings: &[Crossing]) -> Result<u64, TopologyError> {
     );
     let x = r0 + p0 * u128::from(k);
     let modulus = p0 * p1;
-    let magnitude = x.min(modulus - x);
-    u64::try_from(magnitude).map_err(|_| TopologyError::Overflow)
+    if x > modulus / 2 {
+        -((modulus - x) as i128)
+    } else {
+        x as i128
+    }
 }
 
-fn mul_mod(a: u64, b: u64, p: u64) -> u64 {
+pub(super) fn mul_mod(a: u64, b: u64, p: u64) -> u64 {
     (u128::from(a) * u128::from(b) % u128::from(p)) as u64
 }
 
-fn pow_mod(mut base: u64, mut exp: u64, p: u64) -> u64 {
+pub(super) fn pow_mod(mut base: u64, mut exp: u64, p: u64) -> u64 {
     let mut acc = 1;
     while exp > 0 {
         if exp & 1 == 1 {
@@ -341,7 +391,7 @@ fn pow_mod(mut base: u64, mut exp: u64, p: u64) -> u64 {
 
 /// Determinant of the `m x m` row-major integer matrix modulo the prime `p`
 /// (Gaussian elimination).
-fn det_mod(matrix: &[i64], m: usize, p: u64) -> u64 {
+pub(super) fn det_mod(matrix: &[i64], m: usize, p: u64) -> u64 {
     let mut a: Vec<u64> = matrix.iter().map(|&x| x.rem_euclid(p as i64) as u64).collect();
     let mut det = 1;
     for col in 0..m {
@@ -396,14 +446,17 @@ mod tests {
             Crossing {
                 over: 0.5,
                 under: 3.5,
+                positive: true,
             },
             Crossing {
                 over: 2.5,
                 under: 5.5,
+                positive: true,
             },
             Crossing {
                 over: 4.5,
                 under: 1.5,
+                positive: true,
             },
         ];
         assert_eq!(colouring_determinant(&crossings), Ok(3));

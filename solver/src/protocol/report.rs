@@ -3,6 +3,7 @@
 //! whether it stayed quasi-static.
 use super::adaptive::Phase;
 use crate::case::{CaseParams, Direction};
+use crate::knot::Alexander;
 use crate::measurements::{Inversion, Sample};
 use crate::snapshot::Snapshot;
 use crate::words::display_as_word;
@@ -104,7 +105,15 @@ pub struct CaseReport {
     pub reason: String,
     /// The parameters, with the node count and pull speed used.
     pub params: CaseParams,
-    /// Knot determinant of the initial shape and at the end (2n + 1 expected).
+    /// Alexander polynomial of the initial shape and at the end
+    /// (coefficients, lowest power first; the knot's, `params.knot`), `None`
+    /// where not reached or undetermined.
+    #[serde(default)]
+    pub alexander_initial: Option<Alexander>,
+    #[serde(default)]
+    pub alexander_final: Option<Alexander>,
+    /// Knot determinant |Delta(-1)| of the initial shape and at the end
+    /// (2n + 1 for the overhand knot).
     pub determinant_initial: Option<u64>,
     pub determinant_final: Option<u64>,
     /// Writhe of the start shape (closed by tails along the pull axis) and
@@ -149,6 +158,8 @@ impl CaseReport {
             status,
             reason: String::new(),
             params,
+            alexander_initial: None,
+            alexander_final: None,
             determinant_initial: None,
             determinant_final: None,
             writhe: 0.0,

@@ -8,7 +8,8 @@ use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
 use crate::energies;
 use crate::external::{Environment, sliding};
-use crate::knot;
+use crate::knot::StartShape;
+use crate::knot::{self, Alexander, Family};
 use crate::material::Material;
 use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World, WorldStepReport};
@@ -45,7 +46,7 @@ pub(super) fn run(case: &ValidCase, started: Instant, observer: &mut Observer) -
             return report;
         }
     };
-    let mut run = Case::new(params, report, world, case.start().loop_middle, started);
+    let mut run = Case::new(params, report, world, case.start(), started);
     let ending = run.relax().and_then(|()| run.program(observer));
     run.finish(ending.err().unwrap_or(Ending {
         status: Status::Completed,
@@ -74,12 +75,14 @@ impl Ending {
 /// its weight physical ([`CaseParams::scales`]).
 fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
     let (params, shape) = (case.params(), case.start());
-    let expected = knot::expected_determinant(params.n);
-    report.determinant_initial = knot::knot_determinant(&shape.points).ok();
-    if report.determinant_initial != Some(expected) {
+    let points = shape.points();
+    report.determinant_initial = knot::knot_determinant(points).ok();
+    report.alexander_initial = knot::alexander(points).ok();
+    if report.alexander_initial.as_ref() != Some(&shape.alexander) {
         return Err(format!(
-            "the start shape has knot determinant {}, expected {expected}",
-            determinant_text(report.determinant_initial)
+            "the start shape has Alexander polynomial {}, expected {}",
+            alexander_text(report.alexander_initial.as_ref()),
+            shape.alexander
         ));
     }
     let scales = params.scales();
@@ -88,14 +91,14 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         poisson_ratio: params.poisson_ratio,
         density: params.density * scales.mass_scale,
     };
-    let mut rod = Rod::new(&shape.points, params.h, material).map_err(|e| format!("rod: {e}"))?;
-    report.writhe = knot::writhe(&shape.points);
-    report.start_twist = params
-        .start_twist
-        .unwrap_or_else(|| knot::paper_twist(params.n, report.writhe));
+    let mut rod = Rod::new(points, params.h, material).map_err(|e| format!("rod: {e}"))?;
+    report.writhe = knot::writhe(points);
+    let family = params.knot().map_err(|e| e.to_string())?;
+    report.start_twist = params.start_twist.unwrap_or_else(|| family.twist(report.writhe));
     rod.add_twist(report.start_twist);
-    rod.clamp(End::Start);
-    rod.clamp(End::Finish);
+    for (_, end) in shape.clamps() {
+        rod.clamp(end);
+    }
     let newton = NewtonOptions {
         force_scale: Some(force_unit(params)),
         ..NewtonOptions::default()
@@ -143,6 +146,11 @@ fn determinant_text(det: Option<u64>) -> String {
     det.map_or_else(|| "undetermined".to_string(), |d| d.to_string())
 }
 
+/// An Alexander polynomial as users read it.
+fn alexander_text(alexander: Option<&Alexander>) -> String {
+    alexander.map_or_else(|| "undetermined".to_string(), Alexander::to_string)
+}
+
 /// What the run carries from step to step, kept in checkpoints.
 #[derive(Clone)]
 pub(super) struct Carried {
@@ -170,7 +178,9 @@ pub(super) struct Case<'a> {
     pub(super) carried: Carried,
     /// The phase each sample was taken in.
     pub(super) sample_phases: Vec<Phase>,
-    /// Knot determinant of an n-pass overhand knot (2n + 1).
+    /// The knot's Alexander polynomial, and its determinant |Delta(-1)|
+    /// checked at every sample.
+    alexander: Alexander,
     expected: u64,
     /// The case's inertia and time unit.
     pub(super) scales: Scales,
@@ -184,7 +194,13 @@ pub(super) struct Case<'a> {
 }
 
 impl<'a> Case<'a> {
-    fn new(params: &'a CaseParams, report: CaseReport, world: World, mid: usize, started: Instant) -> Self {
+    fn new(
+        params: &'a CaseParams,
+        report: CaseReport,
+        world: World,
+        start: &StartShape,
+        started: Instant,
+    ) -> Self {
         let dt = params.time_step();
         let clock = TimeStep::new(if params.adaptive_dt {
             AdaptiveOptions::up_to(dt)
@@ -198,7 +214,7 @@ impl<'a> Case<'a> {
             peak_kinetic_energy: 0.0,
             impulse: 0.0,
             impulse_time: 0.0,
-            mid,
+            mid: start.loop_middle,
             twist: Tracker::new(rod, report.writhe),
             history: VecDeque::with_capacity(SNAPSHOT_HISTORY),
         };
@@ -209,7 +225,8 @@ impl<'a> Case<'a> {
             clock,
             carried,
             sample_phases: Vec::new(),
-            expected: knot::expected_determinant(params.n),
+            alexander: start.alexander.clone(),
+            expected: start.alexander.determinant(),
             scales: params.scales(),
             axis,
             program: params.program(),
@@ -328,9 +345,23 @@ impl<'a> Case<'a> {
                 stage => self.travel(stage, observer)?,
             }
         }
-        let det = knot::knot_determinant(&self.world.rods[0].positions()).ok();
+        let points = self.world.rods[0].positions();
+        let det = knot::knot_determinant(&points).ok();
         self.report.determinant_final = det;
         self.determinant(det, || "at the end".to_string())?;
+        let alexander = knot::alexander(&points).ok();
+        self.report.alexander_final = alexander.clone();
+        if alexander.as_ref() != Some(&self.alexander) {
+            return Err(Ending::new(
+                Status::TopologyChanged,
+                format!(
+                    "Alexander polynomial {} at the end, expected {}: strands passed through each other; \
+                     {STEP_HINT}",
+                    alexander_text(alexander.as_ref()),
+                    self.alexander
+                ),
+            ));
+        }
         let at = self.l_k_bar();
         self.report
             .snapshots

@@ -1,7 +1,7 @@
 //! Overhand-knot builder: the initial centreline of an overhand knot with `n`
 //! passes (paper Sec. 2 and 4), resampled to `K` nodes with equal edges.
 //!
-//! The shape is that of [`super::geometry`]: braid arc with a double helix,
+//! The shape is that of [`geometry`]: braid arc with a double helix,
 //! loop closing the ring, two tails bent onto the pulling axis `x`. Given the
 //! rod length `L`, the strand length `l_b` of each braid pass and the loop
 //! length `l_l`, each tail has length `l_t = (L - 2 l_b - l_l) / 2`; the
@@ -10,14 +10,17 @@
 //! loop shape closes the ring. The helix radius is `a = (1 + gap) h`, with the
 //! gap raised in steps until every pair of non-neighbouring segments (index
 //! gap `> ceil(2h / edge) + 1`) is at least `2h` apart.
-use super::geometry::{Braid, Dense, Plan, loop_drift, sinc};
-use super::topology::{TopologyError, expected_determinant, knot_determinant};
-use crate::contact::broad_phase::{BroadPhase, neighbour_gap, polyline_segments};
+mod geometry;
+
+use super::alexander::Alexander;
+use super::polyline::{check_clearance, equal_chords};
+use super::twist::paper_twist;
+use super::{Family, KnotError, StartShape, check_knot};
+use geometry::{Braid, Dense, Plan, loop_drift, sinc};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::ops::Range;
-use thiserror::Error;
 
 /// Largest number of passes.
 pub const MAX_PASSES: u32 = 8;
@@ -154,43 +157,23 @@ pub struct KnotShape {
     pub helix_radius: f64,
 }
 
-/// Why a knot could not be built.
-#[derive(Debug, Clone, PartialEq, Error)]
-pub enum KnotError {
-    #[error("number of passes n = {0} must be in 1..=8")]
-    Passes(u32),
-    #[error("{name} = {value} must be finite and positive")]
-    InvalidParameter { name: &'static str, value: f64 },
-    #[error("radius h = {radius} m is too large: the rod length requires h < L/50 = {max} m")]
-    RadiusTooLarge { radius: f64, max: f64 },
-    #[error(
-        "{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}"
-    )]
-    TooFewNodes { nodes: usize, min: usize },
-    #[error(
-        "braid strand length {pass_length} m is too short for 2n+1 half twists of radius h: need {min} m"
-    )]
-    BraidTooShort { pass_length: f64, min: f64 },
-    #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
-    TailsTooShort { tail_length: f64, min: f64 },
-    #[error(
-        "no valid shape with braid passes of {pass_length} m, a loop of {loop_length} m and tails of \
-         {tail_length} m: the loop cannot close around the braid, or the tails cannot reach the axis, \
-         with bend radii of at least 3 helix radii"
-    )]
-    Infeasible {
-        pass_length: f64,
-        loop_length: f64,
-        tail_length: f64,
-    },
-    #[error("end-to-end distance {clamp_span} m is outside the feasible range [{min}, {max}] m")]
-    EndToEndOutOfRange { clamp_span: f64, min: f64, max: f64 },
-    #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
-    Clearance { distance: f64, required: f64 },
-    #[error("topology check failed: {0}")]
-    Topology(#[from] TopologyError),
-    #[error("built curve has knot determinant {got}, expected {expected}")]
-    WrongKnot { got: u64, expected: u64 },
+impl Family for KnotSpec {
+    /// The `(2, 2n + 1)` torus knot's: the overhand knot closes to it.
+    fn alexander(&self) -> Alexander {
+        Alexander::torus_2(2 * self.n + 1)
+    }
+
+    fn tie(&self) -> Result<StartShape, KnotError> {
+        build(self).map(|shape| StartShape {
+            loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
+            rods: vec![shape.points],
+            alexander: self.alexander(),
+        })
+    }
+
+    fn twist(&self, writhe: f64) -> f64 {
+        paper_twist(self.n, writhe)
+    }
 }
 
 /// Builds the knot described by `spec`.
@@ -656,11 +639,7 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
         tail_b: d..points.len(),
     };
     check_clearance(&points, h, design.edge)?;
-    let expected = expected_determinant(n);
-    let got = knot_determinant(&points)?;
-    if got != expected {
-        return Err(KnotError::WrongKnot { got, expected });
-    }
+    check_knot(&points, &spec.alexander())?;
     Ok(KnotShape {
         clamp_span: points[points.len() - 1].x - points[0].x,
         points,
@@ -671,50 +650,6 @@ fn attempt(spec: &KnotSpec, lengths: &Lengths, gap: f64) -> Result<KnotShape, Kn
         tail_length: plan.tail_length,
         helix_radius: design.braid.radius,
     })
-}
-
-/// `count` nodes along the dense polyline from its start, consecutive nodes
-/// exactly `edge` apart (each next node is the first point of the polyline,
-/// past the current one, at distance `edge`), and their arc positions on the
-/// polyline; `None` if the polyline is too short.
-fn equal_chords(
-    dense: &[Vector3<f64>],
-    arc: &[f64],
-    edge: f64,
-    count: usize,
-) -> Option<(Vec<Vector3<f64>>, Vec<f64>)> {
-    let mut nodes = vec![dense[0]];
-    let mut positions = vec![0.0];
-    let mut next = 1;
-    while nodes.len() < count {
-        let p = nodes[nodes.len() - 1];
-        while (dense.get(next)? - p).norm() < edge {
-            next += 1;
-        }
-        // The node lies on dense segment (next - 1, next), whose start is
-        // closer than `edge` to p: take the root of |q + t d| = edge in [0, 1].
-        let (q, d) = (dense[next - 1] - p, dense[next] - dense[next - 1]);
-        let (dd, qd) = (d.norm_squared(), q.dot(&d));
-        let t = (-qd + (qd * qd - dd * (q.norm_squared() - edge * edge)).sqrt()) / dd;
-        nodes.push(dense[next - 1] + t * d);
-        positions.push(arc[next - 1] + t * (arc[next] - arc[next - 1]));
-    }
-    Some((nodes, positions))
-}
-
-/// Fails if two non-neighbouring segments are closer than `2h`.
-fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), KnotError> {
-    let segments = polyline_segments(points, h, 0);
-    let mut broad = BroadPhase::new();
-    let gap = neighbour_gap(2.0 * h, edge);
-    let pairs = broad.find_pairs(&segments, &[gap], 0.0).expect("valid segments");
-    match pairs.iter().map(|p| p.closest.distance).min_by(f64::total_cmp) {
-        Some(distance) => Err(KnotError::Clearance {
-            distance,
-            required: 2.0 * h,
-        }),
-        None => Ok(()),
-    }
 }
 
 #[cfg(test)]

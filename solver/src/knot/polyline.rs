@@ -1,0 +1,74 @@
+//! What every builder does to its designed curve: resampling to equal
+//! chords and the clearance check of the nodes.
+use super::KnotError;
+use crate::contact::broad_phase::{BroadPhase, neighbour_gap, polyline_segments};
+use nalgebra::Vector3;
+
+/// `count` nodes along the dense polyline from its start, consecutive nodes
+/// exactly `edge` apart (each next node is the first point of the polyline,
+/// past the current one, at distance `edge`), and their arc positions on the
+/// polyline; `None` if the polyline is too short.
+pub(super) fn equal_chords(
+    dense: &[Vector3<f64>],
+    arc: &[f64],
+    edge: f64,
+    count: usize,
+) -> Option<(Vec<Vector3<f64>>, Vec<f64>)> {
+    let mut nodes = vec![dense[0]];
+    let mut positions = vec![0.0];
+    let mut next = 1;
+    while nodes.len() < count {
+        let p = nodes[nodes.len() - 1];
+        while (dense.get(next)? - p).norm() < edge {
+            next += 1;
+        }
+        // The node lies on dense segment (next - 1, next), whose start is
+        // closer than `edge` to p: take the root of |q + t d| = edge in [0, 1].
+        let (q, d) = (dense[next - 1] - p, dense[next] - dense[next - 1]);
+        let (dd, qd) = (d.norm_squared(), q.dot(&d));
+        let t = (-qd + (qd * qd - dd * (q.norm_squared() - edge * edge)).sqrt()) / dd;
+        nodes.push(dense[next - 1] + t * d);
+        positions.push(arc[next - 1] + t * (arc[next] - arc[next - 1]));
+    }
+    Some((nodes, positions))
+}
+
+/// Fails if two non-neighbouring segments are closer than `2h`.
+pub(super) fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), KnotError> {
+    let segments = polyline_segments(points, h, 0);
+    let mut broad = BroadPhase::new();
+    let gap = neighbour_gap(2.0 * h, edge);
+    let pairs = broad.find_pairs(&segments, &[gap], 0.0).expect("valid segments");
+    match pairs.iter().map(|p| p.closest.distance).min_by(f64::total_cmp) {
+        Some(distance) => Err(KnotError::Clearance {
+            distance,
+            required: 2.0 * h,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// A dense polyline and its cumulative arc length.
+pub(super) struct Dense {
+    pub(super) points: Vec<Vector3<f64>>,
+    pub(super) arc: Vec<f64>,
+}
+
+impl Dense {
+    /// The polyline through `points`.
+    pub(super) fn new(points: Vec<Vector3<f64>>) -> Self {
+        let mut arc = Vec::with_capacity(points.len());
+        let mut total = 0.0;
+        arc.push(0.0);
+        for w in points.windows(2) {
+            total += (w[1] - w[0]).norm();
+            arc.push(total);
+        }
+        Self { points, arc }
+    }
+
+    /// Its length.
+    pub(super) fn length(&self) -> f64 {
+        self.arc[self.arc.len() - 1]
+    }
+}

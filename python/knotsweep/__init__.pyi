@@ -133,6 +133,9 @@ class Result:
     scaling: Record | None
     writhe: float
     start_twist: float
+    alexander_initial: list[int] | None
+    """The start shape's Alexander polynomial: integer coefficients, lowest power first."""
+    alexander_final: list[int] | None
     determinant_initial: int | None
     determinant_final: int | None
     @property
@@ -145,7 +148,9 @@ def run(
     *,
     progress: bool | Callable[[Progress], Any] | None = None,
     # Knot
+    knot: Literal["overhand", "figure_eight", "braid"] = "overhand",
     n: int = 3,
+    braid_word: str | None = None,
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,
@@ -190,21 +195,34 @@ def run(
 
     Case parameters (SI units), by group:
     Knot:
-      n: Number of passes (unknotting number) of the overhand knot. Range: integer in 1..=8. Default: 3.
+      knot: The knot tied in the rod: "overhand" with n passes (the paper's), "figure_eight" (4_1) or "braid",
+          the closure of braid_word opened into a long knot. Each is tied loose and contact-free, clamped at
+          both ends and pulled apart; its Alexander polynomial is checked on the start shape and at the end
+          and reported (alexander_initial, alexander_final: coefficients, lowest power first), and the knot
+          determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). Range: "overhand" or
+          "figure_eight" or "braid". Default: "overhand". Paper: "overhand".
+      n: Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).
+          Range: integer in 1..=8. Default: 3.
+      braid_word: The braid whose closure knot "braid" ties: generators s1 ... s4 (s_i crosses strands i and i
+          + 1, the one moving up passing over; s_i^-1 the mirror crossing), each with an optional power such
+          as s2^-1 or s1^3, separated by spaces; at most 5 strands and 64 letters, and the closure must be a
+          knot (one component). "s1 s1 s1" is the trefoil, "s1 s2^-1 s1 s2^-1" the figure-eight. Range: null
+          or a braid word such as "s1 s2^-1 s1 s2^-1" (generators s1 ... s4). null: no braid: for every knot
+          but "braid". Default: null.
       start_twist (turns): Twist the knot starts with between its clamps, spread evenly along the rod; 0:
           none, as if the knot's ends had turned freely while it was tied. The report gives the twist used and
           the knot's writhe; docs/VALIDATION.md ("Sensitivity") the inversions with and without it. Range:
           null or [-20, 20] turns. null: the paper's code's, which gives the rod the linking number 2n with
           the pull axis (sign of the knot's writhe). Default: null. Paper: null (the code).
-      end_to_end (m): Initial clamp-to-clamp distance. Range: null or (0, L] m. null: the knot builder's
-          default for n. Default: null.
-      braid_length (m): Strand length of a braid pass in the initial shape. Range: null or (0, L/2] m. null:
-          the knot builder's default. Default: null.
+      end_to_end (m): Initial clamp-to-clamp distance of the overhand knot. Range: null or (0, L] m. null: the
+          knot builder's default for n. Default: null.
+      braid_length (m): Strand length of a braid pass in the overhand knot's initial shape. Range: null or (0,
+          L/2] m. null: the knot builder's default. Default: null.
       initial_shape (m): Start from these points instead of the builder's knot: the polyline must be `length`
           long (within 1 %), every node between the ends along the line joining them (the clamps hold the
-          first and last points), no two non-neighbouring segments closer than 2h, and of the knot type of an
-          n-pass overhand knot. Mind the request body limit (GET /api/limits). Range: null or K = nodes points
-          [x, y, z]. null: the builder's knot. Default: null.
+          first and last points), no two non-neighbouring segments closer than 2h, and carry the Alexander
+          polynomial of the knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).
+          Range: null or K = nodes points [x, y, z]. null: the builder's knot. Default: null.
 
     Rod and material:
       h (m): Rod radius h, from L/16000 (the knot builder's edges of at most 4h within 4001 nodes) to below
@@ -316,7 +334,9 @@ def run(
 def validate(
     *,
     # Knot
+    knot: Literal["overhand", "figure_eight", "braid"] = "overhand",
     n: int = 3,
+    braid_word: str | None = None,
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,

@@ -94,9 +94,10 @@ class Result:
     unless a loosening stage saw the loop flip back) and ``quasi_static``
     (None where no sample was taken at ``pull_speed``); ``scaling`` (time
     step, mass scale, time unit, pull rates); ``writhe`` and ``start_twist``
-    (turns); the knot determinants ``determinant_initial`` and
-    ``determinant_final``; ``report``, the whole report as a dict (without
-    the series)."""
+    (turns); the knot's Alexander polynomials ``alexander_initial`` and
+    ``alexander_final`` (integer coefficients, lowest power first) and
+    determinants ``determinant_initial`` and ``determinant_final``;
+    ``report``, the whole report as a dict (without the series)."""
 
     def __init__(self, report: dict, series: dict[str, np.ndarray]):
         self.report = report
@@ -119,6 +120,8 @@ class Result:
         self.scaling: Record | None = Record(scaling) if scaling is not None else None
         self.writhe: float = report.get("writhe", 0.0)
         self.start_twist: float = report.get("start_twist", 0.0)
+        self.alexander_initial: list[int] | None = report.get("alexander_initial")
+        self.alexander_final: list[int] | None = report.get("alexander_final")
         self.determinant_initial: int | None = report.get("determinant_initial")
         self.determinant_final: int | None = report.get("determinant_final")
 

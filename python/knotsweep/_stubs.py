@@ -150,6 +150,9 @@ class Result:
     scaling: Record | None
     writhe: float
     start_twist: float
+    alexander_initial: list[int] | None
+    """The start shape's Alexander polynomial: integer coefficients, lowest power first."""
+    alexander_final: list[int] | None
     determinant_initial: int | None
     determinant_final: int | None
     @property

@@ -83,9 +83,19 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
         _ => default.clone(),
     };
     let integer = matches!(p.range, Range::Integers(..));
+    let words = match p.range {
+        Range::Words(words) => words,
+        _ => &[],
+    };
     arg.help(p.description())
         .allow_negative_numbers(true)
-        .value_parser(move |text: &str| parse(&kind, integer, text))
+        .value_parser(move |text: &str| {
+            if !words.is_empty() && !words.contains(&text) {
+                let known: Vec<String> = words.iter().map(|w| format!("{w:?}")).collect();
+                return Err(format!("must be one of {}", known.join(", ")));
+            }
+            parse(&kind, integer, text)
+        })
 }
 
 /// A loading program given inline as JSON, or the path of a file holding it.

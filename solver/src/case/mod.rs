@@ -432,6 +432,68 @@ mod tests {
         ));
     }
 
+    /// A knot's parameters are refused naming the field: a braid word that is
+    /// missing, empty, malformed, on too many strands or closing to a link,
+    /// or given to another knot; the overhand's shape given to another knot.
+    #[test]
+    fn knot_choices_are_checked_naming_the_field() {
+        let refusal = |p: CaseParams| {
+            let errors = p.validate().unwrap_err();
+            (errors[0].field.clone(), errors[0].reason.clone())
+        };
+        let braid = |word: Option<&str>| CaseParams {
+            knot: KnotKind::Braid,
+            braid_word: word.map(str::to_string),
+            ..CaseParams::default()
+        };
+        for (word, says) in [
+            (None, "needs a braid word"),
+            (Some(" "), "empty"),
+            (Some("s1 t2"), "not a generator"),
+            (Some("s1 s5"), "at most 5"),
+            (Some("s1 s3"), "link of 2 components"),
+        ] {
+            let (field, reason) = refusal(braid(word));
+            assert_eq!(field, "braid_word", "{word:?}");
+            assert!(reason.contains(says), "{word:?}: {reason}");
+        }
+        assert!(braid(Some("s1 s2^-1 s1 s2^-1")).validate().is_ok());
+        let figure_eight = CaseParams {
+            knot: KnotKind::FigureEight,
+            ..CaseParams::default()
+        };
+        assert!(figure_eight.validate().is_ok());
+        let with_n = CaseParams {
+            n: 4,
+            ..figure_eight.clone()
+        };
+        assert_eq!(refusal(with_n).0, "n");
+        let with_braid = CaseParams {
+            braid_length: Some(0.2),
+            ..figure_eight.clone()
+        };
+        assert_eq!(refusal(with_braid).0, "braid_length");
+        let overhand_word = CaseParams {
+            braid_word: Some("s1 s1 s1".to_string()),
+            ..CaseParams::default()
+        };
+        assert_eq!(refusal(overhand_word).0, "braid_word");
+        let unknown: Result<CaseParams, _> = serde_json::from_str(r#"{"knot": "granny"}"#);
+        assert!(
+            unknown
+                .unwrap_err()
+                .to_string()
+                .contains("unknown variant `granny`")
+        );
+        let short = CaseParams {
+            length: 0.3,
+            ..figure_eight
+        };
+        let (field, reason) = refusal(short);
+        assert_eq!(field, "length");
+        assert!(reason.contains("needs a rod of at least"), "{reason}");
+    }
+
     #[test]
     fn unknown_fields_are_rejected() {
         let r: Result<CaseParams, _> = serde_json::from_str(r#"{"n": 3, "radius": 0.001}"#);

@@ -512,8 +512,11 @@ fn cartesian(
             Ok(params) => {
                 if let Err(problems) = params.validate_in(&mut builds) {
                     for p in problems {
-                        let field = match axes.iter().zip(&index).find(|((axis, _), _)| *axis == p.field) {
-                            Some((_, i)) => format!("grid.{}[{i}]", p.field),
+                        let on_axis = |axis: &str| {
+                            axis == p.field || (axis == KNOT_AXIS && KNOT_FIELDS.contains(&p.field.as_str()))
+                        };
+                        let field = match axes.iter().zip(&index).find(|((axis, _), _)| on_axis(axis)) {
+                            Some(((axis, _), i)) => format!("grid.{axis}[{i}]"),
                             None => format!("base.{}", p.field),
                         };
                         if !errors.iter().any(|e: &FieldError| e.field == field) {
@@ -663,6 +666,45 @@ mod tests {
                 .iter()
                 .all(|c| c.params.nodes == Some(161) && c.params.h == 1.6e-3)
         );
+    }
+
+    /// The knot axis takes words and objects of knot parameters; the
+    /// `knots` preset lists knots of every family, each named.
+    #[test]
+    fn the_knot_axis_lists_knots_of_every_family() {
+        let l = Limits::default();
+        let knots = expand(&spec(serde_json::json!({"preset": "knots"})), &l).unwrap();
+        assert_eq!(knots.varied, ["knot"]);
+        let labels: Vec<String> = knots.cases.iter().map(|c| c.params.knot_label()).collect();
+        assert_eq!(
+            labels,
+            [
+                "overhand n = 1",
+                "overhand n = 2",
+                "overhand n = 3",
+                "overhand n = 4",
+                "figure_eight",
+                "braid s1 s1 s1",
+                "braid s1^3 s2 s1^-1 s2"
+            ]
+        );
+        assert!(
+            knots
+                .cases
+                .iter()
+                .all(|c| c.params.h == 1.6e-3 && c.params.mu == 0.1)
+        );
+        let bad = spec(serde_json::json!({"grid": {"knot": [
+            "figure_eight",
+            {"knot": "overhand", "mu": 0.2},
+            "granny"
+        ]}}));
+        assert_eq!(fields(expand(&bad, &l)), ["grid.knot[1].mu", "grid.knot[2]"]);
+        let link = spec(serde_json::json!({"grid": {"knot": [
+            "figure_eight",
+            {"knot": "braid", "braid_word": "s1 s3"}
+        ]}}));
+        assert_eq!(fields(expand(&link, &l)), ["grid.knot[1]"]);
     }
 
     #[test]

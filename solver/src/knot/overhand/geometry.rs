@@ -13,6 +13,7 @@
 //! `theta` along a circular arc and ends with a straight clamp section along
 //! `x`. Closing the tails underneath everything gives the closure of the
 //! 2-braid `sigma^(2n+1)`, the `(2, 2n+1)` torus knot.
+use crate::knot::polyline;
 use nalgebra::Vector3;
 use std::f64::consts::PI;
 
@@ -224,16 +225,10 @@ impl Plan {
         for p in &mut points {
             *p += shift;
         }
-        let mut arc_len = Vec::with_capacity(points.len());
-        let mut total = 0.0;
-        arc_len.push(0.0);
-        for w in points.windows(2) {
-            total += (w[1] - w[0]).norm();
-            arc_len.push(total);
-        }
+        let curve = polyline::Dense::new(points);
         Dense {
-            points,
-            arc: arc_len,
+            points: curve.points,
+            arc: curve.arc,
             marks,
         }
     }

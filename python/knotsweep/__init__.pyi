@@ -212,8 +212,9 @@ def run(
       start_twist (turns): Twist the knot starts with between its clamps, spread evenly along the rod; 0:
           none, as if the knot's ends had turned freely while it was tied. The report gives the twist used and
           the knot's writhe; docs/VALIDATION.md ("Sensitivity") the inversions with and without it. Range:
-          null or [-20, 20] turns. null: the paper's code's, which gives the rod the linking number 2n with
-          the pull axis (sign of the knot's writhe). Default: null. Paper: null (the code).
+          null or [-20, 20] turns. null: for the overhand knot the paper's code's, which gives the rod the
+          linking number 2n with the pull axis (sign of the knot's writhe); 0 for the other knots. Default:
+          null. Paper: null (the code).
       end_to_end (m): Initial clamp-to-clamp distance of the overhand knot. Range: null or (0, L] m. null: the
           knot builder's default for n. Default: null.
       braid_length (m): Strand length of a braid pass in the overhand knot's initial shape. Range: null or (0,

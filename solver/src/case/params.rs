@@ -264,8 +264,8 @@ pub const PARAMETERS: &[Parameter] = &[
         default: "null",
         range: closed(-20.0, 20.0),
         null: Some(
-            "the paper's code's, which gives the rod the linking number 2n with the pull axis (sign of the \
-             knot's writhe)",
+            "for the overhand knot the paper's code's, which gives the rod the linking number 2n with the pull \
+             axis (sign of the knot's writhe); 0 for the other knots",
         ),
         paper: "null (the code)",
         doc: "Twist the knot starts with between its clamps, spread evenly along the rod; 0: none, as if the \

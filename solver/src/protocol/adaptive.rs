@@ -8,7 +8,6 @@
 //! with the clamps held, and moves through the event at `pull_speed` with the
 //! case's damping and step, fast again from `SLOW_AFTER` past it. Each phase
 //! of this schedule is a [`Phase`].
-use super::report::PhaseSpan;
 use crate::case::{CaseParams, Protocol};
 use crate::measurements::Sample;
 use crate::words::display_as_word;
@@ -262,20 +261,6 @@ impl<T> Checkpoints<T> {
             .rposition(|(l, _)| way.reached(l_k_bar, *l))
             .unwrap_or(0);
         self.list.drain(at..).next()
-    }
-}
-
-/// A new span of `phase` in program stage `stage` (`None`: relaxing),
-/// starting at `l_k_bar`.
-pub(super) fn span(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> PhaseSpan {
-    PhaseSpan {
-        phase,
-        stage,
-        from_l_k_bar: l_k_bar,
-        to_l_k_bar: l_k_bar,
-        steps: 0,
-        newton_iterations: 0,
-        contact_sweeps: 0,
     }
 }
 

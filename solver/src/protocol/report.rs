@@ -199,6 +199,22 @@ pub struct PhaseSpan {
     pub contact_sweeps: u64,
 }
 
+impl PhaseSpan {
+    /// A new span of `phase` in program stage `stage` (`None`: relaxing),
+    /// starting at `l_k_bar`.
+    pub(super) fn new(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> Self {
+        Self {
+            phase,
+            stage,
+            from_l_k_bar: l_k_bar,
+            to_l_k_bar: l_k_bar,
+            steps: 0,
+            newton_iterations: 0,
+            contact_sweeps: 0,
+        }
+    }
+}
+
 /// Progress handed to the caller after every sample.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Progress {

@@ -1,8 +1,8 @@
 //! A case's run: the knot built and clamped, relaxed, then its loading
 //! program walked stage by stage; the steps, samples and checks every stage
 //! shares; the report at the end.
-use super::adaptive::{Phase, RELAX_DAMPING, span};
-use super::report::{CaseReport, Event, Progress, QuasiStatic, Scaling, Status};
+use super::adaptive::{Phase, RELAX_DAMPING};
+use super::report::{CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
@@ -386,7 +386,7 @@ impl<'a> Case<'a> {
     /// A new entry in the report's phases, from here.
     fn begin(&mut self, phase: Phase, stage: Option<usize>) {
         let at = self.l_k_bar();
-        self.report.phases.push(span(phase, stage, at));
+        self.report.phases.push(PhaseSpan::new(phase, stage, at));
     }
 
     /// Counts `step` in the current phase, which now ends here.

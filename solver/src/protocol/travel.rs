@@ -18,18 +18,18 @@ use crate::time_step::TimeStep;
 /// Where a stage stands between samples, kept in checkpoints.
 #[derive(Clone)]
 pub(super) struct Travel {
-    pub(super) way: Way,
+    way: Way,
     /// The series index of the stage's first sample.
     first_sample: usize,
     next_sample: f64,
-    pub(super) snapshots: SnapshotPlan,
+    snapshots: SnapshotPlan,
     phase: Phase,
     /// l_k bar where `phase` began.
     phase_start: f64,
     /// Where the fast approach saw the event that the snap phase is resolving.
     fast_event: Option<f64>,
     /// The stage's first event.
-    pub(super) event: Option<Event>,
+    event: Option<Event>,
     /// The stage's end has been redone slowly (`review_end`).
     reviewed: bool,
 }
@@ -88,7 +88,8 @@ impl Case<'_> {
             }
             travel.next_sample = way.on(l_k_bar, self.params.sample_interval);
             let points = self.sample(travel.phase, &step, dt, l_k_bar);
-            self.keep_snapshots(&mut travel, l_k_bar);
+            let found = self.detect(&mut travel);
+            self.keep_snapshots(&mut travel.snapshots, found, l_k_bar);
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
             let stop = self.stop_at(&travel, target);
             let within = way.along(start, l_k_bar) / way.along(start, stop);
@@ -260,8 +261,9 @@ impl Case<'_> {
         Ok(())
     }
 
-    /// Detects the current stage's first event in its own samples.
-    pub(super) fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
+    /// Detects the current stage's first event in its own samples; returns
+    /// it when found at this sample.
+    fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
         if travel.event.is_some() {
             return None;
         }

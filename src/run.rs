@@ -340,8 +340,13 @@ fn summarise(report: &CaseReport) {
     match &report.inversion {
         Some(inv) => {
             println!(
-                "inversion at l_k bar {:.2} (l_c/L {:.4}), F bar {:.4} -> {:.4}, kinetic energy {:.1} times its median",
-                inv.l_k_bar, inv.l_c_over_l, inv.f_bar_before, inv.f_bar_after, inv.kinetic_energy_ratio
+                "inversion at l_k bar {:.2} (l_c/L {:.4}; the knot's own length {:.2}), F bar {:.4} -> {:.4}, kinetic energy {:.1} times its median",
+                inv.l_k_bar,
+                inv.l_c_over_l,
+                inv.l_k_arc_bar,
+                inv.f_bar_before,
+                inv.f_bar_after,
+                inv.kinetic_energy_ratio
             );
             if inv.f_bar_after >= inv.f_bar_before {
                 println!(
@@ -349,7 +354,13 @@ fn summarise(report: &CaseReport) {
                 );
             }
         }
-        None => println!("no inversion"),
+        None => match report.series.last() {
+            Some(last) => println!(
+                "no inversion down to l_k bar {:.2} (the knot's own length {:.2})",
+                last.l_k_bar, last.l_k_arc_bar
+            ),
+            None => println!("no inversion"),
+        },
     }
     if let Some(q) = &report.quasi_static {
         if q.holds {
@@ -380,9 +391,10 @@ fn summarise(report: &CaseReport) {
     }
     let s = &report.stats;
     println!(
-        "{} steps ({} relaxing), {} Newton iterations, {} contact sweeps, {:.1} s wall (detection {:.1} s, contact {:.1} s, rods {:.1} s)",
+        "{} steps ({} relaxing, {} restarts), {} Newton iterations, {} contact sweeps, {:.1} s wall (detection {:.1} s, contact {:.1} s, rods {:.1} s)",
         s.steps,
         s.relax_steps,
+        s.restarts,
         s.newton_iterations,
         s.contact_sweeps,
         s.wall_time,
@@ -395,8 +407,9 @@ fn summarise(report: &CaseReport) {
         .iter()
         .map(|span| {
             let stage = span.stage.map_or(String::new(), |i| format!("stage {} ", i + 1));
+            let outcome = span.outcome.map_or(String::new(), |o| format!(", {o}"));
             format!(
-                "{stage}{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps)",
+                "{stage}{} {:.1} -> {:.1} ({} steps, {} Newton iterations, {} sweeps{outcome})",
                 span.phase,
                 span.from_l_k_bar,
                 span.to_l_k_bar,
@@ -409,11 +422,12 @@ fn summarise(report: &CaseReport) {
     println!("phases in l_k bar: {}", phases.join(", "));
     for e in &report.events {
         println!(
-            "stage {} ({}): {} at l_k bar {:.2}, F bar {:.4} -> {:.4}, H bar {:.3} -> {:.3}{}",
+            "stage {} ({}): {} at l_k bar {:.2} (the knot's own length {:.2}), F bar {:.4} -> {:.4}, H bar {:.3} -> {:.3}{}",
             e.stage + 1,
             report.params.program()[e.stage].name(),
             e.kind,
             e.at.l_k_bar,
+            e.at.l_k_arc_bar,
             e.at.f_bar_before,
             e.at.f_bar_after,
             e.at.h_bar_before,

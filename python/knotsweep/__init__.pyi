@@ -41,8 +41,9 @@ class Record(dict[str, Any]):
     def __getattr__(self, name: str) -> Any: ...
 
 class Inversion(Record):
-    """The inversion point (eq. 11's quantities)."""
+    """The inversion point (eq. 11's quantities, and the knot's own length)."""
     l_k_bar: float
+    l_k_arc_bar: float
     l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
@@ -57,6 +58,7 @@ class Stats(Record):
     newton_iterations: int
     contact_sweeps: int
     relax_steps: int
+    restarts: int
     rejected_steps: int
     smallest_dt: float
     wall_time: float
@@ -73,6 +75,7 @@ class Stage(Record):
     steps: int
     newton_iterations: int
     contact_sweeps: int
+    outcome: Literal["restarted", "confirmed", "refuted", "too_late"] | None
 
 class Event(Record):
     """A snap of the loop in one stage of the loading program."""
@@ -80,7 +83,9 @@ class Event(Record):
     direction: Literal["tighten", "loosen"]
     kind: Literal["inversion", "flip_back"]
     clean: bool
+    restarts: int
     l_k_bar: float
+    l_k_arc_bar: float
     l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
@@ -121,7 +126,7 @@ class Result:
     params: dict[str, Any]
     inversion: Inversion | None
     series: dict[str, np.ndarray]
-    """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
+    """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_k_arc_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
     snapshots: list[Snapshot]
     stats: Stats
     phases: list[Stage]
@@ -268,9 +273,10 @@ def run(
           it pulls as "reference" does). Its inversions match the reference's at a fraction of the cost, but
           its fast approach reads F bar high (BENCHMARKS.md, "Pull protocols"): choose "reference" for force
           curves. Range: "reference" or "adaptive". Default: "adaptive". Paper: "reference".
-      min_l_k_bar: Stop when l_k bar falls below this. Range: [0, 1e6]. Default: 60.0.
-      stop_after_inversion: Stop this far in l_k bar past a detected inversion. Range: null or [0, 1e6]. null:
-          never early. Default: 10.0.
+      min_l_k_bar: Stop when the knot's own length l_k arc bar, (arc length - l_c) / h (l_k bar less the rod's
+          stretch), falls below this. Range: [0, 1e6]. Default: 60.0.
+      stop_after_inversion: Stop this far past a detected inversion, in the knot's own length l_k arc bar.
+          Range: null or [0, 1e6]. null: never early. Default: 10.0.
       max_force_bar: Stop when F bar exceeds this (the knot is tight). Range: null or > 0. null: never.
           Default: null.
       loading: The loading program: the stages the clamps go through after the knot has relaxed, in order,
@@ -280,8 +286,9 @@ def run(
           holds the clamps still; {"rotate": {"turns": N, "ends": "one" or "both"}} turns the finish clamp (or
           both, in opposite senses) by N turns in all about the pull axis, right-handed from the start clamp
           to the finish clamp; {"soft": {"stiffness_bar": k, "to_l_k_bar": X}} moves the grips at pull_speed
-          with the clamps on springs of stiffness k h^3 / EI along the pull, to the knot's l_k bar X. protocol
-          = "adaptive" runs pulls and releases fast far from events. Events (inversions, flips back) are
+          with the clamps on springs of stiffness k h^3 / EI along the pull, to X. Every X is the knot's own
+          length l_k arc bar, (arc length - l_c) / h, which the rod's stretch does not move. protocol =
+          "adaptive" runs pulls and releases fast far from events. Events (inversions, flips back) are
           detected in every stage (docs/API.md, "Loading programs"). Range: null or a list of at most 32
           stages, each {"pull" | "release" | "hold" | "rotate" | "soft": {...}}. null: one tightening:
           [{"pull": {}}], to the stopping rules. Default: null. Paper: null.

@@ -30,28 +30,33 @@ class Record(dict):
 
 class Inversion(Record):
     """The inversion point (eq. 11's quantities; docs/API.md, "Phase diagram"):
-    ``l_k_bar``, ``l_c_over_L``, ``F_bar_before``, ``F_bar_after``,
-    ``H_bar_before``, ``H_bar_after``, ``kinetic_energy_ratio``, ``sample``."""
+    ``l_k_bar``, ``l_k_arc_bar`` (the knot's own length, (arc length - l_c) / h),
+    ``l_c_over_L``, ``F_bar_before``, ``F_bar_after``, ``H_bar_before``,
+    ``H_bar_after``, ``kinetic_energy_ratio``, ``sample``."""
 
 
 class Stats(Record):
     """Counts and timings of a run: ``steps``, ``newton_iterations``,
-    ``contact_sweeps``, ``relax_steps``, ``rejected_steps``, ``smallest_dt``
+    ``contact_sweeps``, ``relax_steps``, ``restarts`` (returns of the adaptive
+    pull to a checkpoint), ``rejected_steps``, ``smallest_dt``
     (s), ``wall_time``, ``detection_time``, ``contact_time``, ``dynamics_time`` (s)."""
 
 
 class Stage(Record):
     """A stretch of the run in one step phase (``settle``, ``reference``,
-    ``approach``, ``snap``, ``after``, ``hold``, ``rotate``): ``phase``,
-    ``stage`` (the loading program's stage index, None for the relaxation),
-    ``from_l_k_bar``, ``to_l_k_bar``, ``steps``, ``newton_iterations``,
-    ``contact_sweeps``."""
+    ``approach``, ``snap``, ``after``, ``fallback``, ``hold``, ``rotate``):
+    ``phase``, ``stage`` (the loading program's stage index, None for the
+    relaxation), ``from_l_k_bar``, ``to_l_k_bar``, ``steps``,
+    ``newton_iterations``, ``contact_sweeps``, ``outcome`` (how the adaptive
+    schedule ended it: ``restarted``, ``confirmed``, ``refuted``, ``too_late``;
+    None: it ran its course)."""
 
 
 class Event(Record):
     """A snap of the loop in one stage of the loading program: ``stage``
     (index), ``direction`` (``tighten``, ``loosen``), ``kind`` (``inversion``,
-    ``flip_back``), ``clean``, and the inversion's quantities (``l_k_bar``,
+    ``flip_back``), ``clean``, ``restarts`` (the stage's restarts until it was
+    found), and the inversion's quantities (``l_k_bar``, ``l_k_arc_bar``,
     ``F_bar_before``, ``F_bar_after``, ``H_bar_before``, ``H_bar_after``, ...)."""
 
 

@@ -58,8 +58,9 @@ class Record(dict[str, Any]):
     def __getattr__(self, name: str) -> Any: ...
 
 class Inversion(Record):
-    """The inversion point (eq. 11's quantities)."""
+    """The inversion point (eq. 11's quantities, and the knot's own length)."""
     l_k_bar: float
+    l_k_arc_bar: float
     l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
@@ -74,6 +75,7 @@ class Stats(Record):
     newton_iterations: int
     contact_sweeps: int
     relax_steps: int
+    restarts: int
     rejected_steps: int
     smallest_dt: float
     wall_time: float
@@ -90,6 +92,7 @@ class Stage(Record):
     steps: int
     newton_iterations: int
     contact_sweeps: int
+    outcome: Literal["restarted", "confirmed", "refuted", "too_late"] | None
 
 class Event(Record):
     """A snap of the loop in one stage of the loading program."""
@@ -97,7 +100,9 @@ class Event(Record):
     direction: Literal["tighten", "loosen"]
     kind: Literal["inversion", "flip_back"]
     clean: bool
+    restarts: int
     l_k_bar: float
+    l_k_arc_bar: float
     l_c_over_L: float
     F_bar_before: float
     F_bar_after: float
@@ -138,7 +143,7 @@ class Result:
     params: dict[str, Any]
     inversion: Inversion | None
     series: dict[str, np.ndarray]
-    """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
+    """Numpy arrays by the columns of `knotsweep run --csv` (time, l_k_bar, l_k_arc_bar, l_c_over_L, F, F_bar, W, H, H_bar, ...)."""
     snapshots: list[Snapshot]
     stats: Stats
     phases: list[Stage]

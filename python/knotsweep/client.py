@@ -287,7 +287,7 @@ class Sweep:
     def phase_diagram(self, raw: bool = False):
         """The phase diagram as a pandas DataFrame, one row per case in grid
         order: ``case_id``, the varied parameters, ``status``, the inversion's
-        fields (``l_k_bar``, ``l_c_over_L``, ``F_bar_before``, ...; NaN without
+        fields (``l_k_bar``, ``l_k_arc_bar``, ``l_c_over_L``, ``F_bar_before``, ...; NaN without
         one), ``simplified_l_k_bar`` (the simplified model's snap),
         ``reason`` and, for a certified sweep, ``refined_l_k_bar``,
         ``uncertainty`` (|refined - default| in l_k bar),
@@ -301,7 +301,7 @@ class Sweep:
         if raw:
             return diagram
         pd = _require_pandas("phase_diagram")
-        fields = ["l_k_bar", "l_c_over_L", "F_bar_before", "F_bar_after", "H_bar_before",
+        fields = ["l_k_bar", "l_k_arc_bar", "l_c_over_L", "F_bar_before", "F_bar_after", "H_bar_before",
                   "H_bar_after", "kinetic_energy_ratio"]
         certified_columns = [("refined_l_k_bar", "refined_l_k_bar"), ("uncertainty", "absolute"),
                              ("relative_uncertainty", "relative"), ("converged", "converged")]

@@ -38,6 +38,11 @@ pub enum SweepStatus {
 pub struct InversionPoint {
     /// l_k bar = (L - l_c) / h at the inversion.
     pub l_k_bar: f64,
+    /// The knot's own length (s - l_c) / h at the inversion, s the rod's arc
+    /// length between the clamps: l_k bar less the rod's elastic stretch (0
+    /// for results computed before it was measured).
+    #[serde(default)]
+    pub l_k_arc_bar: f64,
     /// l_c / L at the inversion.
     #[serde(rename = "l_c_over_L")]
     pub l_c_over_l: f64,
@@ -61,6 +66,7 @@ impl From<&solver::measurements::Inversion> for InversionPoint {
     fn from(i: &solver::measurements::Inversion) -> Self {
         Self {
             l_k_bar: i.l_k_bar,
+            l_k_arc_bar: i.l_k_arc_bar,
             l_c_over_l: i.l_c_over_l,
             f_bar_before: i.f_bar_before,
             f_bar_after: i.f_bar_after,
@@ -309,7 +315,7 @@ pub struct CaseDetail {
     pub sweeps: Vec<i64>,
     pub result: Option<ResultView>,
     /// The tightening series (one object per sample, named as the columns of
-    /// `series.csv`: time, l_k_bar, l_c_over_L, F, F_bar, W, H, H_bar,
+    /// `series.csv`: time, l_k_bar, l_k_arc_bar, l_c_over_L, F, F_bar, W, H, H_bar,
     /// kinetic_energy (peak since the previous sample), contacts,
     /// active_contacts, max_penetration_over_h, epsilon, phi,
     /// newton_iterations, dt), null before the result.

@@ -83,6 +83,7 @@ mod tests {
     fn at(l_k_bar: f64) -> Inversion {
         Inversion {
             l_k_bar,
+            l_k_arc_bar: l_k_bar,
             l_c_over_l: 0.0,
             f_bar_before: 0.0,
             f_bar_after: 0.0,

@@ -3,6 +3,12 @@
 //! Definitions used here (the paper's Fig. 4 in words):
 //! - l_c: distance between the two outermost (clamped) nodes; l_k = L - l_c,
 //!   l_k bar = l_k / h.
+//! - The knot's own length, l_k arc bar = (s - l_c) / h with s the arc length
+//!   of the deformed rod between the clamps: eq. 11's l_k bar less the rod's
+//!   elastic elongation. Straight tails add as much to s as to l_c, so that
+//!   it measures the knot alone, whatever the tails' length and stretch (a
+//!   rubber tail stretches by F bar / 4: 1.25 % at F bar 0.05, 17 radii over
+//!   a tail of 1 375 radii).
 //! - F: traction force, the clamps' reactions along the pulling axis (mean of
 //!   the two ends); F bar = F h^2 / EI with EI = (pi/4) E h^4.
 //! - Braid ends: the braid is where the part of the rod before the loop's middle
@@ -36,6 +42,10 @@ pub struct Sample {
     /// Simulated time since the pull started (s).
     pub time: f64,
     pub l_k_bar: f64,
+    /// The knot's own length (s - l_c) / h (module documentation; 0 in
+    /// series stored before it was measured).
+    #[serde(default)]
+    pub l_k_arc_bar: f64,
     #[serde(rename = "l_c_over_L", alias = "l_c_over_l")]
     pub l_c_over_l: f64,
     /// Traction force F (N) and F bar.
@@ -114,9 +124,10 @@ pub enum Column {
 /// The series' columns in order, by the names of the CSV header (and of
 /// the Python binding's arrays), which are `Sample`'s JSON names: one per
 /// field.
-pub const COLUMNS: [(&str, Column); 25] = [
+pub const COLUMNS: [(&str, Column); 26] = [
     ("time", Column::Real(|s| s.time)),
     ("l_k_bar", Column::Real(|s| s.l_k_bar)),
+    ("l_k_arc_bar", Column::Real(|s| s.l_k_arc_bar)),
     ("l_c_over_L", Column::Real(|s| s.l_c_over_l)),
     ("F", Column::Real(|s| s.force)),
     ("F_bar", Column::Real(|s| s.f_bar)),
@@ -167,6 +178,17 @@ pub fn series_csv(series: &[Sample]) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The knot's own length l_k arc bar = (s - l_c) / h of the rod through
+/// `points`, of radius `h` (module documentation).
+pub fn l_k_arc_bar(points: &[Vector3<f64>], h: f64) -> f64 {
+    let arc: f64 = points.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let chord = match points {
+        [first, .., last] => (last - first).norm(),
+        _ => 0.0,
+    };
+    (arc - chord) / h
 }
 
 /// The loop between the braid ends.
@@ -310,8 +332,11 @@ pub fn loop_geometry(points: &[Vector3<f64>], start: usize, end: usize) -> LoopG
 /// The snap-through point (paper Fig. 5).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Inversion {
-    /// l_k bar and l_c / L of the last sample before H bar drops.
+    /// l_k bar, the knot's own length and l_c / L of the last sample before
+    /// H bar drops.
     pub l_k_bar: f64,
+    #[serde(default)]
+    pub l_k_arc_bar: f64,
     #[serde(rename = "l_c_over_L", alias = "l_c_over_l")]
     pub l_c_over_l: f64,
     /// F bar just before the drop and its minimum just after.
@@ -413,6 +438,7 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
         }
         return Some(Inversion {
             l_k_bar: before.l_k_bar,
+            l_k_arc_bar: before.l_k_arc_bar,
             l_c_over_l: before.l_c_over_l,
             f_bar_before: before.f_bar,
             f_bar_after: f_after,
@@ -471,6 +497,7 @@ pub fn detect_flip_back(series: &[Sample], criteria: &InversionCriteria) -> Opti
         }
         return Some(Inversion {
             l_k_bar: before.l_k_bar,
+            l_k_arc_bar: before.l_k_arc_bar,
             l_c_over_l: before.l_c_over_l,
             f_bar_before: before.f_bar,
             f_bar_after: rise.f_bar,
@@ -551,6 +578,35 @@ mod tests {
             "height": 4, "h_bar": 5, "kinetic_energy": 0, "contacts": 0, "active_contacts": 0,
             "max_penetration_over_h": 0, "epsilon": 0, "phi": 0, "newton_iterations": 0, "dt": 0}"#;
         assert_eq!(serde_json::from_str::<Sample>(old).unwrap(), sample);
+    }
+
+    /// Straight tails either side of a semicircular bump of radius r: the
+    /// own length is (pi - 2) r / h, whatever the tails' length and however
+    /// far they stretch along the line; eq. 11's l_k bar counts the stretch.
+    #[test]
+    fn the_knots_own_length_ignores_the_tails_and_their_stretch() {
+        let (r, h) = (0.01, 1e-3);
+        let rod = |tail: f64, stretch: f64| {
+            let mut pts: Vec<Vector3<f64>> = (0..=100)
+                .map(|k| Vector3::new(-tail * stretch * (1.0 - k as f64 / 100.0) - r, 0.0, 0.0))
+                .collect();
+            pts.extend((1..2000).map(|k| {
+                let a = PI * (1.0 - k as f64 / 2000.0);
+                Vector3::new(r * a.cos(), r * a.sin(), 0.0)
+            }));
+            pts.extend((0..=100).map(|k| Vector3::new(r + tail * stretch * k as f64 / 100.0, 0.0, 0.0)));
+            pts
+        };
+        let expected = (PI - 2.0) * r / h;
+        for (tail, stretch) in [(0.1, 1.0), (2.0, 1.0), (2.0, 1.0125)] {
+            let own = l_k_arc_bar(&rod(tail, stretch), h);
+            assert!((own / expected - 1.0).abs() < 1e-5, "{own} against {expected}");
+        }
+        // Eq. 11 with the unstretched length: the stretch of two tails of
+        // 2 m (2.5 cm each) reads as 50 radii less knot.
+        let length = 2.0 * 2.0 + PI * r;
+        let l_c = 2.0 * (2.0 * 1.0125 + r);
+        assert!(((length - l_c) / h - (expected - 50.0)).abs() < 1e-6);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The pull protocols (`solver::case::Protocol`): the adaptive pull finds
 //! the reference pull's inversion in far fewer steps.
 use solver::case::{CaseParams, Protocol};
-use solver::protocol::{self, Phase, PhaseSpan, Status};
+use solver::protocol::{self, Outcome, Phase, PhaseSpan, Status};
 
 /// On the default n = 3 case (K = 301, mu = 0.1), the adaptive pull's
 /// inversion is within 1 % of the reference pull's, it takes under a third
@@ -28,6 +28,7 @@ fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
             .map(|s| s.f_bar)
             .collect();
         let f_bar = far.iter().sum::<f64>() / far.len() as f64;
+        restarts_add_up(&report);
         (inversion, report.stats.steps + report.stats.relax_steps, f_bar)
     };
     let (reference, reference_steps, reference_f) = run(Protocol::Reference);
@@ -44,6 +45,50 @@ fn the_adaptive_pull_finds_the_reference_inversion_in_fewer_steps() {
         3 * adaptive_steps < reference_steps,
         "{adaptive_steps} steps against {reference_steps}"
     );
+}
+
+/// A report's restarts: one per phase the schedule ended by going back,
+/// at most `MAX_RESTARTS`, the event carrying its stage's; every slow phase
+/// that ended by the schedule's rules says how.
+fn restarts_add_up(report: &protocol::CaseReport) {
+    let back = (report.phases.iter())
+        .filter(|s| matches!(s.outcome, Some(Outcome::Restarted | Outcome::TooLate)))
+        .count() as u64;
+    assert_eq!(report.stats.restarts, back, "{:?}", report.phases);
+    assert!(report.stats.restarts <= u64::from(protocol::MAX_RESTARTS));
+    if let Some(event) = report.events.first() {
+        assert_eq!(u64::from(event.restarts), report.stats.restarts);
+    }
+    for pair in report.phases.windows(2) {
+        if matches!(pair[0].phase, Phase::Snap | Phase::Fallback) {
+            assert!(pair[0].outcome.is_some(), "{:?}", report.phases);
+        }
+    }
+}
+
+/// A rod twice its knot's length (L/h = 1250, the knot built at the paper's
+/// size, the rest straight tails) stops where the knot's own length, not
+/// eq. 11's l_k bar, reaches `min_l_k_bar`: its last sample is the first at
+/// or below it, and l_k bar lies below it by the tails' stretch.
+#[test]
+fn a_rod_longer_than_its_knot_stops_at_the_knots_own_length() {
+    let params = CaseParams {
+        n: 1,
+        length: 2.0,
+        min_l_k_bar: 380.0,
+        ..CaseParams::default()
+    };
+    let report = protocol::run(&params, &mut |_| true);
+    assert_eq!(report.status, Status::Completed, "{}", report.reason);
+    restarts_add_up(&report);
+    let [.., before, last] = report.series[..] else {
+        panic!("{} samples", report.series.len())
+    };
+    assert!(
+        last.l_k_arc_bar <= 380.0 && before.l_k_arc_bar > 380.0,
+        "{before:?} {last:?}"
+    );
+    assert!(last.f_bar > 0.0 && last.l_k_bar < last.l_k_arc_bar, "{last:?}");
 }
 
 /// Above `ADAPTIVE_MAX_MU` the adaptive protocol pulls exactly as the

@@ -1,9 +1,12 @@
 //! Any rod on a researcher's bench: the cost and the inversion of knots in
 //! rods of other materials and slenderness than the paper's, measured in one
 //! run against the paper's rubber rod (BENCHMARKS.md and docs/FIDELITY.md,
-//! "Any rod"). Each case is a `knotsweep run` child process; its CPU time is
-//! the child's user + system time (`wait4`), so that cases run side by side
-//! (`--jobs`) are still measured alone.
+//! "Any rod"), and the map of the rod space (`--table map`, its corners
+//! `--table corners`): L/h by n by mu, the paper's rubber and a stiff thin
+//! line, each case's cost against the paper's rod of the same n. Each case is
+//! a `knotsweep run` child process; its CPU time is the child's user + system
+//! time (`wait4`), so that cases run side by side (`--jobs`) are still
+//! measured alone.
 use anyhow::{Context, Result, bail, ensure};
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -17,9 +20,17 @@ pub struct Args {
     knotsweep: Option<PathBuf>,
     /// Which table: `materials` (E, rho and the named materials), `slenderness`
     /// (L/h), `check` (the rods of the acceptance check), `rates` (the paper's rod
-    /// pulled faster, physical inertia) or `all`.
+    /// pulled faster, physical inertia), `lengths` (the inversion against L/h
+    /// at L = 1 m, n = 2 ... 5, and Fig. 7's h sweep), `all` (those five),
+    /// `map` (L/h 625 ... 5000 by n 2 ... 6 by mu 0.05 ... 0.5, rubber and a
+    /// nylon line: 120 cases) or `corners` (the map's 16 corners).
     #[arg(long, default_value = "all")]
     table: String,
+    /// With `map` or `corners`: each case of L/h at most this also under the
+    /// reference pull, and the adaptive pull's deviation from it (a reference
+    /// pull costs about (L/h / 625)^2 times the paper's rod's).
+    #[arg(long)]
+    reference_up_to: Option<f64>,
     /// Cases run at once.
     #[arg(long, default_value_t = 1)]
     jobs: usize,
@@ -43,6 +54,74 @@ fn rod(label: &str, flags: &str) -> Rod {
         label: label.to_string(),
         flags: flags.split_whitespace().map(str::to_string).collect(),
     }
+}
+
+/// The map's materials: the paper's rubber (L = 1 m, h = L / (L/h), as
+/// Fig. 7 varies it) and a stiff thin nylon line (h = 0.25 mm, L = (L/h) h).
+const MAP_MATERIALS: [(&str, &str); 2] = [
+    (
+        "rubber",
+        "--youngs-modulus 1.8e6 --density 1000 --poisson-ratio 0.5",
+    ),
+    (
+        "nylon line",
+        "--youngs-modulus 3e9 --density 1140 --poisson-ratio 0.4",
+    ),
+];
+const MAP_RATIOS: [f64; 4] = [625.0, 1250.0, 2500.0, 5000.0];
+const MAP_NS: [u32; 5] = [2, 3, 4, 5, 6];
+const MAP_MUS: [f64; 3] = [0.05, 0.2, 0.5];
+const LINE_H: f64 = 2.5e-4;
+
+/// A case of the map.
+struct MapCase {
+    material: usize,
+    ratio: f64,
+    n: u32,
+    mu: f64,
+}
+
+impl MapCase {
+    /// Its `knotsweep run` flags.
+    fn flags(&self, reference: bool) -> Vec<String> {
+        let (length, h) = match self.material {
+            0 => (1.0, 1.0 / self.ratio),
+            _ => (self.ratio * LINE_H, LINE_H),
+        };
+        let protocol = if reference { " --protocol reference" } else { "" };
+        let flags = format!(
+            "--n {} --length {length} --h {h:e} --mu {} {}{protocol}",
+            self.n, self.mu, MAP_MATERIALS[self.material].1
+        );
+        flags.split_whitespace().map(str::to_string).collect()
+    }
+}
+
+/// The map's cases (`corners`: the first and last of every axis).
+fn map_cases(corners: bool) -> Vec<MapCase> {
+    let ends = |len: usize| -> Vec<usize> {
+        if corners {
+            vec![0, len - 1]
+        } else {
+            (0..len).collect()
+        }
+    };
+    let mut cases = Vec::new();
+    for material in 0..MAP_MATERIALS.len() {
+        for &r in &ends(MAP_RATIOS.len()) {
+            for &n in &ends(MAP_NS.len()) {
+                for &m in &ends(MAP_MUS.len()) {
+                    cases.push(MapCase {
+                        material,
+                        ratio: MAP_RATIOS[r],
+                        n: MAP_NS[n],
+                        mu: MAP_MUS[m],
+                    });
+                }
+            }
+        }
+    }
+    cases
 }
 
 /// The tables' rods; each table starts with the paper's rod, its unit of cost.
@@ -105,6 +184,24 @@ fn table(name: &str) -> Result<Vec<Rod>> {
                 "--n 4 --h 5e-4 --youngs-modulus 2e11 --density 7850 --poisson-ratio 0.3 --mu 0.12",
             ));
         }
+        "lengths" => {
+            rods.clear();
+            for n in 2..=5 {
+                for ratio in MAP_RATIOS {
+                    rods.push(rod(
+                        &format!("n = {n}, L/h = {ratio:.0}"),
+                        &format!("--n {n} --h {:e}", 1.0 / ratio),
+                    ));
+                }
+            }
+            for h in ["2.0e-3", "2.4e-3", "2.8e-3", "3.2e-3"] {
+                let ratio = 1.0 / h.parse::<f64>()?;
+                rods.push(rod(
+                    &format!("Fig. 7: n = 3, L/h = {ratio:.1} (h = {h} m)"),
+                    &format!("--n 3 --h {h}"),
+                ));
+            }
+        }
         "rates" => {
             rods = vec![rod("reference pull, 3 mm/s", "--n 3 --protocol reference")];
             for u in ["1e-2", "3e-2", "6e-2"] {
@@ -120,7 +217,9 @@ fn table(name: &str) -> Result<Vec<Rod>> {
                 ));
             }
         }
-        other => bail!("unknown table {other:?}: materials, slenderness, check, rates or all"),
+        other => bail!(
+            "unknown table {other:?}: materials, slenderness, check, rates, lengths, all, map or corners"
+        ),
     }
     Ok(rods)
 }
@@ -186,31 +285,16 @@ fn phase_steps(report: &Value) -> String {
         .join(", ")
 }
 
-/// The rod's slack at the inversion without its stretch, (arc length -
-/// l_c) / h, from the snapshot at the inversion: l_k bar = (L - l_c) / h
-/// (eq. 11) also counts the rod's elastic elongation, strain F / EA = F bar / 4.
-fn slack(report: &Value) -> Option<f64> {
-    let h = report["params"]["h"].as_f64()?;
-    let shots = report
-        .get("snapshots")
-        .or_else(|| report.get("frames"))?
-        .as_array()?;
-    let at = shots.iter().find(|s| s["label"] == "at_inversion")?;
-    let points: Vec<[f64; 3]> = serde_json::from_value(at["points"].clone()).ok()?;
-    let dist = |a: &[f64; 3], b: &[f64; 3]| {
-        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-    };
-    let arc: f64 = points.windows(2).map(|w| dist(&w[0], &w[1])).sum();
-    Some((arc - dist(points.first()?, points.last()?)) / h)
-}
-
 /// One table row.
 fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
     let r = &m.report;
     let inv = &r["inversion"];
-    let l_k = inv["l_k_bar"]
-        .as_f64()
-        .map_or("none".to_string(), |l| format!("{l:.2}"));
+    let length = |key: &str| {
+        inv[key]
+            .as_f64()
+            .map_or("none".to_string(), |l| format!("{l:.2}"))
+    };
+    let (l_k, own) = (length("l_k_bar"), length("l_k_arc_bar"));
     let clean = match (inv["F_bar_before"].as_f64(), inv["F_bar_after"].as_f64()) {
         (Some(b), Some(a)) if a < b => "yes",
         (Some(_), Some(_)) => "no (F bar rises)",
@@ -229,7 +313,7 @@ fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
     });
     let scaling = &r["scaling"];
     format!(
-        "| {} | {} | {} | {} | {:.2} | {:.1}x | {} | {} | {} | {} | {} | {} |",
+        "| {} | {} | {} | {} | {:.2} | {:.1}x | {} | {} | {} | {} | {} | {} | {} |",
         rod.label,
         r["status"].as_str().unwrap_or("?"),
         r["params"]["nodes"],
@@ -237,8 +321,9 @@ fn row(rod: &Rod, m: &Measured, unit: f64) -> String {
         m.cpu,
         m.cpu / unit,
         l_k,
-        slack(r).map_or("-".to_string(), |s| format!("{s:.1}")),
+        own,
         clean,
+        r["stats"]["restarts"],
         ratio,
         scaling["mass_scale"]
             .as_f64()
@@ -257,13 +342,22 @@ pub fn run(args: Args) -> Result<String> {
         "no knotsweep binary at {}: build it (`cargo build --release`) or give --knotsweep",
         binary.display()
     );
-    let names: Vec<&str> = match args.table.as_str() {
-        "all" => vec!["check", "materials", "slenderness", "rates"],
-        one => vec![one],
-    };
     let dir = tempfile::tempdir()?;
     let keep = args.keep.clone().unwrap_or_else(|| dir.path().to_path_buf());
     std::fs::create_dir_all(&keep)?;
+    if let name @ ("map" | "corners") = args.table.as_str() {
+        return map(
+            &binary,
+            name,
+            args.reference_up_to,
+            args.jobs.max(1),
+            &keep.join(name),
+        );
+    }
+    let names: Vec<&str> = match args.table.as_str() {
+        "all" => vec!["check", "materials", "slenderness", "rates", "lengths"],
+        one => vec![one],
+    };
     let mut doc = String::new();
     for name in names {
         let mut rods = table(name)?;
@@ -295,15 +389,147 @@ pub fn run(args: Args) -> Result<String> {
         )?;
         writeln!(
             doc,
-            "| rod | status | K | steps | CPU (s) | CPU / first row | l_k bar | (arc - l_c) / h | F bar falls | \
+            "| rod | status | K | steps | CPU (s) | CPU / first row | l_k bar | own length | F bar falls | restarts | \
              kinetic / elastic | mass scale | steps by phase |"
         )?;
-        writeln!(doc, "|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+        writeln!(doc, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
         for (r, m) in rods.iter().zip(&measured) {
             writeln!(doc, "{}", row(r, m, unit))?;
         }
     }
     Ok(doc)
+}
+
+/// The map (or its corners) as a table, each case's CPU against the paper's
+/// rod of the same n measured in the same run; those of L/h at most
+/// `reference_up_to` against the reference pull too.
+fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir: &Path) -> Result<String> {
+    let cases = map_cases(name == "corners");
+    let compared: Vec<usize> = (0..cases.len())
+        .filter(|&i| reference_up_to.is_some_and(|r| cases[i].ratio <= r))
+        .collect();
+    let ns: Vec<u32> = MAP_NS
+        .into_iter()
+        .filter(|n| cases.iter().any(|c| c.n == *n))
+        .collect();
+    let mut rods: Vec<Rod> = ns
+        .iter()
+        .map(|n| rod(&format!("the paper's rod, n = {n}"), &format!("--n {n}")))
+        .collect();
+    for c in &cases {
+        rods.push(Rod {
+            label: String::new(),
+            flags: c.flags(false),
+        });
+    }
+    for &i in &compared {
+        rods.push(Rod {
+            label: String::new(),
+            flags: cases[i].flags(true),
+        });
+    }
+    let measured = run_all(binary, &rods, jobs, dir)?;
+    let (units, rest) = measured.split_at(ns.len());
+    let (adaptive, references) = rest.split_at(cases.len());
+    let mut doc = String::new();
+    let reference_flag = reference_up_to.map_or(String::new(), |r| format!(" --reference-up-to {r}"));
+    writeln!(
+        doc,
+        "\n### {name}\n\n`cargo run --release -p xtask -- bench-rods --table {name}{reference_flag}`\n"
+    )?;
+    writeln!(
+        doc,
+        "| the paper's rod | steps | CPU (s) | event l_k bar | own length |"
+    )?;
+    writeln!(doc, "|---|---|---|---|---|")?;
+    for (n, m) in ns.iter().zip(units) {
+        let (l_k, own) = event_lengths(&m.report);
+        writeln!(
+            doc,
+            "| n = {n} | {} | {:.2} | {l_k} | {own} |",
+            m.report["stats"]["steps"], m.cpu
+        )?;
+    }
+    writeln!(
+        doc,
+        "\n| rod | L/h | n | mu | status | K | event l_k bar | own length | clean | steps | restarts | CPU (s) | \
+         CPU / paper's n | reference l_k bar | deviation | steps by phase |"
+    )?;
+    writeln!(
+        doc,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    )?;
+    let (mut worst_restarts, mut worst_cost, mut worst_deviation) = (0, 0.0f64, 0.0f64);
+    let (mut none, mut unclean) = (0, 0);
+    for (i, (c, m)) in cases.iter().zip(adaptive).enumerate() {
+        let r = &m.report;
+        let unit = units[ns.iter().position(|n| *n == c.n).expect("a unit per n")].cpu;
+        let (l_k, own) = event_lengths(r);
+        let event = r["events"].get(0);
+        let clean = event.map_or("-", |e| if e["clean"] == true { "yes" } else { "no" });
+        none += usize::from(event.is_none());
+        unclean += usize::from(clean == "no");
+        let restarts = r["stats"]["restarts"].as_u64().unwrap_or(0);
+        worst_restarts = worst_restarts.max(restarts);
+        worst_cost = worst_cost.max(m.cpu / unit);
+        let (ref_l_k, deviation) = match compared.iter().position(|&j| j == i).map(|k| &references[k]) {
+            Some(reference) => {
+                let ours = r["inversion"]["l_k_bar"].as_f64();
+                let theirs = reference.report["inversion"]["l_k_bar"].as_f64();
+                let deviation = ours.zip(theirs).map(|(a, b)| (a - b).abs() / b);
+                if let Some(d) = deviation {
+                    worst_deviation = worst_deviation.max(d);
+                }
+                (
+                    theirs.map_or("none".to_string(), |l| format!("{l:.2}")),
+                    deviation.map_or("-".to_string(), |d| format!("{:.2} %", 100.0 * d)),
+                )
+            }
+            None => ("-".to_string(), "-".to_string()),
+        };
+        writeln!(
+            doc,
+            "| {} | {:.0} | {} | {} | {} | {} | {l_k} | {own} | {clean} | {} | {restarts} | {:.2} | {:.1}x | {ref_l_k} | \
+             {deviation} | {} |",
+            MAP_MATERIALS[c.material].0,
+            c.ratio,
+            c.n,
+            c.mu,
+            r["status"].as_str().unwrap_or("?"),
+            r["params"]["nodes"],
+            r["stats"]["steps"],
+            m.cpu,
+            m.cpu / unit,
+            phase_steps(r),
+        )?;
+    }
+    writeln!(
+        doc,
+        "\n{} cases: at most {worst_restarts} restarts, at most {worst_cost:.1} times the paper's rod of the same n, \
+         {none} without an event, {unclean} not clean{}.",
+        cases.len(),
+        if compared.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", on the {} compared the adaptive pull's inversion at most {:.2} % from the reference pull's",
+                compared.len(),
+                100.0 * worst_deviation
+            )
+        }
+    )?;
+    Ok(doc)
+}
+
+/// The first event's eq. 11 l_k bar and the knot's own length, as text.
+fn event_lengths(report: &Value) -> (String, String) {
+    let event = report["events"].get(0);
+    let text = |key: &str| {
+        event
+            .and_then(|e| e[key].as_f64())
+            .map_or("none".to_string(), |l| format!("{l:.2}"))
+    };
+    (text("l_k_bar"), text("l_k_arc_bar"))
 }
 
 /// Runs every rod, `jobs` at a time, in order.

@@ -13,12 +13,13 @@ pub const MAX_HOLD: f64 = 1e3;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum LoadStage {
-    /// Tighten: the clamps move apart at `pull_speed` until l_k bar falls to
-    /// `to_l_k_bar` (null: the case's stopping rules, `min_l_k_bar`,
-    /// `stop_after_inversion` and `max_force_bar`).
+    /// Tighten: the clamps move apart at `pull_speed` until the knot's own
+    /// length l_k arc bar (`measurements::l_k_arc_bar`: l_k bar less the
+    /// rod's stretch) falls to `to_l_k_bar` (null: the case's stopping rules,
+    /// `min_l_k_bar`, `stop_after_inversion` and `max_force_bar`).
     Pull(Target),
-    /// Loosen: the clamps move together at `pull_speed` until l_k bar rises
-    /// to `to_l_k_bar` (null: where the program started).
+    /// Loosen: the clamps move together at `pull_speed` until the knot's own
+    /// length rises to `to_l_k_bar` (null: where the program started).
     Release(Target),
     /// The clamps held still for `seconds`.
     Hold(Hold),
@@ -28,7 +29,7 @@ pub enum LoadStage {
     Rotate(Rotate),
     /// The grips move apart at `pull_speed` while the clamps sit on springs of
     /// stiffness `stiffness_bar` (k h^3 / EI) along the pull axis, until the
-    /// knot's l_k bar falls to `to_l_k_bar` (null: the stopping rules).
+    /// knot's own length falls to `to_l_k_bar` (null: the stopping rules).
     Soft(Soft),
 }
 

@@ -514,7 +514,8 @@ pub const PARAMETERS: &[Parameter] = &[
         range: closed(0.0, 1e6),
         null: None,
         paper: "",
-        doc: "Stop when l_k bar falls below this.",
+        doc: "Stop when the knot's own length l_k arc bar, (arc length - l_c) / h (l_k bar less the rod's stretch), \
+              falls below this.",
         value: |p| Some(Value::Number(p.min_l_k_bar)),
     },
     Parameter {
@@ -525,7 +526,7 @@ pub const PARAMETERS: &[Parameter] = &[
         range: closed(0.0, 1e6),
         null: Some("never early"),
         paper: "",
-        doc: "Stop this far in l_k bar past a detected inversion.",
+        doc: "Stop this far past a detected inversion, in the knot's own length l_k arc bar.",
         value: |p| p.stop_after_inversion.map(Value::Number),
     },
     Parameter {
@@ -568,7 +569,8 @@ pub const PARAMETERS: &[Parameter] = &[
               holds the clamps still; {\"rotate\": {\"turns\": N, \"ends\": \"one\" or \"both\"}} turns the finish \
               clamp (or both, in opposite senses) by N turns in all about the pull axis, right-handed from the start \
               clamp to the finish clamp; {\"soft\": {\"stiffness_bar\": k, \"to_l_k_bar\": X}} moves the grips at \
-              pull_speed with the clamps on springs of stiffness k h^3 / EI along the pull, to the knot's l_k bar X. \
+              pull_speed with the clamps on springs of stiffness k h^3 / EI along the pull, to X. Every X is the \
+              knot's own length l_k arc bar, (arc length - l_c) / h, which the rod's stretch does not move. \
               protocol = \"adaptive\" runs pulls and releases fast far from events. Events (inversions, flips back) \
               are detected in every stage (docs/API.md, \"Loading programs\").",
         value: UNCHECKED,

@@ -6,9 +6,25 @@
 //! `CHECKPOINT_SPACING` in l_k bar. When an event is detected the stage goes
 //! back to the checkpoint `RESTART_BEFORE` before it, lets the knot settle
 //! with the clamps held, and moves through the event at `pull_speed` with the
-//! case's damping and step, fast again from `SLOW_AFTER` past it. Each phase
-//! of this schedule is a [`Phase`].
-use super::report::PhaseSpan;
+//! case's damping and step (the snap phase), fast again from `SLOW_AFTER`
+//! past it. Each phase of this schedule is a [`Phase`].
+//!
+//! The schedule's windows (`RESTART_BEFORE`, `MIN_LEAD`, `SLOW_AFTER`,
+//! `FALSE_ALARM`, `END_REVIEW`, the smeared snap's) are lengths of the knot
+//! itself, its own length l_k arc bar ([`crate::measurements`]): eq. 11's l_k
+//! bar also counts the tails' elastic stretch, which the fast pull's higher
+//! tension lengthens in proportion to the tails' length, so that a window in
+//! l_k bar would shrink around the knot of a long rod (the fast pull snaps
+//! later in l_k bar, and a restart `RESTART_BEFORE` before it lands past the
+//! fold). Checkpoints are due by l_k bar, the clamps' travel.
+//!
+//! A stage goes back at most `MAX_RESTARTS` times. The snap phase ends when
+//! its event is confirmed (seen at `pull_speed`), refuted (`FALSE_ALARM` past
+//! the fast pull's event without one: fast again, the fall it saw no longer
+//! watched) or found too soon after the restart (going back further); its
+//! span in the report says which ([`Outcome`]). The last restart runs the
+//! reference pull through the stretch ([`Phase::Fallback`]): to the event
+//! and `SLOW_AFTER` past it, or, refuted, to the stage's end.
 use crate::case::{CaseParams, Protocol};
 use crate::measurements::Sample;
 use crate::words::display_as_word;
@@ -82,6 +98,9 @@ const SMEARED_WINDOW: f64 = 20.0;
 const SMEARED_SPAN: f64 = 5.0;
 /// Checkpoints kept (they span several retries of `RESTART_BEFORE`).
 pub(super) const CHECKPOINTS: usize = 24;
+/// Restarts from a checkpoint a stage may take: the last one falls back to
+/// the reference pull ([`Phase::Fallback`]).
+pub const MAX_RESTARTS: u32 = 2;
 /// Damping rate (1/s, over the case's time unit) while relaxing and settling.
 pub(super) const RELAX_DAMPING: f64 = 20.0;
 
@@ -108,6 +127,10 @@ pub enum Phase {
     Snap,
     /// Fast again, `SLOW_AFTER` past the event.
     After,
+    /// At `pull_speed` from the stage's last restart ([`MAX_RESTARTS`]):
+    /// the schedule gave up going back and runs the reference pull through
+    /// the event, or to the stage's end when the event is refuted.
+    Fallback,
     /// The clamps held still (a hold stage).
     Hold,
     /// The clamps turning (a rotate stage).
@@ -123,7 +146,7 @@ impl Phase {
     pub(super) fn speed(self, pulled: f64) -> f64 {
         match self {
             Phase::Settle | Phase::Hold | Phase::Rotate => 0.0,
-            Phase::Reference => 1.0,
+            Phase::Reference | Phase::Fallback => 1.0,
             Phase::Snap => SNAP_FACTOR,
             Phase::Approach => ramp(pulled / RAMP),
             Phase::After => ramp(pulled / RAMP_AFTER),
@@ -136,7 +159,7 @@ impl Phase {
     /// [`Phase::spares_sliding`]).
     pub(super) fn damping(self, case: f64, relax: f64) -> f64 {
         match self {
-            Phase::Reference | Phase::Snap | Phase::Hold | Phase::Rotate => case,
+            Phase::Reference | Phase::Fallback | Phase::Snap | Phase::Hold | Phase::Rotate => case,
             Phase::Settle | Phase::Approach | Phase::After => case.max(relax),
         }
     }
@@ -151,7 +174,7 @@ impl Phase {
     /// The largest time step given the case's.
     pub(super) fn dt_max(self, case: f64) -> f64 {
         match self {
-            Phase::Reference | Phase::Snap | Phase::Hold | Phase::Rotate => case,
+            Phase::Reference | Phase::Fallback | Phase::Snap | Phase::Hold | Phase::Rotate => case,
             Phase::Settle | Phase::Approach | Phase::After => case * FAST_DT_FACTOR,
         }
     }
@@ -164,6 +187,23 @@ impl Phase {
         }
     }
 }
+
+/// How a phase of the adaptive schedule ended, when it ended by its rules.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Saw an event: the stage goes back to a checkpoint before it.
+    Restarted,
+    /// Its event, seen at `pull_speed`.
+    Confirmed,
+    /// Passed the fast pull's event by `FALSE_ALARM` without one.
+    Refuted,
+    /// Its event came within `MIN_LEAD` of the restart, which was past the
+    /// fold: the stage goes back further.
+    TooLate,
+}
+
+display_as_word!(Outcome);
 
 /// From the snap speed (0) to the fast one (1).
 fn ramp(fraction: f64) -> f64 {
@@ -213,7 +253,7 @@ impl Way {
 
 /// A snap the damped fast approach of a tightening smeared out: H bar has
 /// fallen below `SMEARED_FALL` of its largest value within the last
-/// `SMEARED_WINDOW` of l_k bar, over more than `SMEARED_SPAN` (a sudden drop
+/// `SMEARED_WINDOW` of the knot's own length, over more than `SMEARED_SPAN` (a sudden drop
 /// is `measurements::detect_inversion`'s). Returns where the fall began (the
 /// last sample within `SMEARED_START` of that largest value: the fold lies
 /// after it) and where H bar is now. The damping slows the snap down while the
@@ -222,16 +262,17 @@ impl Way {
 /// where the reference pull snaps at once).
 pub(super) fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
     let last = series.last().filter(|s| s.h_bar > 0.0)?;
-    let window = || (series.iter().rev()).take_while(|s| s.l_k_bar <= last.l_k_bar + SMEARED_WINDOW);
+    let window = || (series.iter().rev()).take_while(|s| s.l_k_arc_bar <= last.l_k_arc_bar + SMEARED_WINDOW);
     let peak = window().map(|s| s.h_bar).fold(0.0, f64::max);
     if last.h_bar >= SMEARED_FALL * peak {
         return None;
     }
-    let began = window().find(|s| s.h_bar >= SMEARED_START * peak)?.l_k_bar;
-    (began - last.l_k_bar > SMEARED_SPAN).then_some((began, last.l_k_bar))
+    let began = window().find(|s| s.h_bar >= SMEARED_START * peak)?.l_k_arc_bar;
+    (began - last.l_k_arc_bar > SMEARED_SPAN).then_some((began, last.l_k_arc_bar))
 }
 
-/// A fast approach's checkpoints of state `T` and where the next is due.
+/// A fast approach's checkpoints of state `T`, each with the knot's own
+/// length where it was taken, and where (l_k bar) the next is due.
 pub(super) struct Checkpoints<T> {
     pub(super) list: VecDeque<(f64, T)>,
     pub(super) next: f64,
@@ -245,37 +286,24 @@ impl<T> Checkpoints<T> {
         }
     }
 
-    /// Keeps `state` taken at `l_k_bar`, dropping the oldest beyond `CHECKPOINTS`.
-    pub(super) fn keep(&mut self, way: Way, l_k_bar: f64, state: T) {
+    /// Keeps `state` taken at `l_k_bar`, the knot's own length `arc`,
+    /// dropping the oldest beyond `CHECKPOINTS`.
+    pub(super) fn keep(&mut self, way: Way, l_k_bar: f64, arc: f64, state: T) {
         if self.list.len() == CHECKPOINTS {
             self.list.pop_front();
         }
-        self.list.push_back((l_k_bar, state));
+        self.list.push_back((arc, state));
         self.next = way.on(l_k_bar, CHECKPOINT_SPACING);
     }
 
-    /// The latest checkpoint at or before `l_k_bar` along the stage, else
-    /// the earliest kept; it and the later ones leave the list, the earlier
-    /// ones stay for a retry from further back.
-    pub(super) fn before(&mut self, way: Way, l_k_bar: f64) -> Option<(f64, T)> {
+    /// The latest checkpoint at or before the knot's own length `arc` along
+    /// the stage, else the earliest kept; it and the later ones leave the
+    /// list, the earlier ones stay for a retry from further back.
+    pub(super) fn before(&mut self, way: Way, arc: f64) -> Option<T> {
         let at = (self.list.iter())
-            .rposition(|(l, _)| way.reached(l_k_bar, *l))
+            .rposition(|(l, _)| way.reached(arc, *l))
             .unwrap_or(0);
-        self.list.drain(at..).next()
-    }
-}
-
-/// A new span of `phase` in program stage `stage` (`None`: relaxing),
-/// starting at `l_k_bar`.
-pub(super) fn span(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> PhaseSpan {
-    PhaseSpan {
-        phase,
-        stage,
-        from_l_k_bar: l_k_bar,
-        to_l_k_bar: l_k_bar,
-        steps: 0,
-        newton_iterations: 0,
-        contact_sweeps: 0,
+        self.list.drain(at..).next().map(|(_, state)| state)
     }
 }
 
@@ -283,13 +311,15 @@ pub(super) fn span(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> PhaseSpa
 mod tests {
     use super::*;
 
-    /// Samples every 0.5 in l_k bar from 300 down, H bar from `h`.
+    /// Samples every 0.5 in the knot's own length from 300 down, H bar
+    /// from `h`; l_k bar lags it by a growing stretch of the tails.
     fn series(h: impl Fn(f64) -> f64) -> Vec<Sample> {
         (0..60)
             .map(|i| 300.0 - 0.5 * f64::from(i))
-            .map(|l_k_bar| Sample {
-                l_k_bar,
-                h_bar: h(l_k_bar),
+            .map(|l_k_arc_bar| Sample {
+                l_k_bar: l_k_arc_bar - 20.0 - 0.4 * (300.0 - l_k_arc_bar),
+                l_k_arc_bar,
+                h_bar: h(l_k_arc_bar),
                 ..Sample::default()
             })
             .collect()
@@ -322,12 +352,13 @@ mod tests {
             (Way(-1.0), [300.0, 302.0, 304.0]),
         ] {
             let mut saved = Checkpoints::new(300.0);
+            // Due by l_k bar, found by the knot's own length (5 more).
             for m in marks {
-                saved.keep(way, m, m);
+                saved.keep(way, m, m + 5.0, m);
             }
             assert_eq!(saved.next, way.on(marks[2], CHECKPOINT_SPACING));
             // Back from just past the last mark: the second.
-            let (l, _) = saved.before(way, way.back(marks[2], 1.0)).unwrap();
+            let l = saved.before(way, way.back(marks[2] + 5.0, 1.0)).unwrap();
             assert_eq!(l, marks[1]);
             assert_eq!(saved.list.len(), 1);
         }

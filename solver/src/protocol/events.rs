@@ -41,6 +41,7 @@ pub(super) fn detect(
         kind,
         at,
         clean,
+        restarts: 0,
     })
 }
 

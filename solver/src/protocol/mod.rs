@@ -2,7 +2,18 @@
 //! material frames, no relative rotation), relax with the ends held, then
 //! run the case's loading program ([`crate::case::LoadStage`]: by default one
 //! tightening, the clamps pulled apart along the line joining them), sampling
-//! the measurements of eq. (11), the energies and the linking number.
+//! the measurements of eq. (11), the knot's own length, the energies and the
+//! linking number.
+//!
+//! Which length each rule acts on: samples are taken every
+//! `sample_interval` of eq. 11's l_k bar (the clamps' travel), and events are
+//! detected over windows of it, as the paper's Fig. 5 reads them; the
+//! stopping rules (`min_l_k_bar`, `stop_after_inversion`, the stages'
+//! `to_l_k_bar`) and the adaptive schedule's windows act on the knot's own
+//! length l_k arc bar, which the tails' elastic stretch does not move, so that
+//! a rod longer than its knot stops, and restarts, where the paper's rod would
+//! (eq. 11's l_k bar of a rubber rod of L/h = 2000 trails it by 30 radii at
+//! F bar 0.06).
 //!
 //! - `report.rs`: what a case reports ([`CaseReport`], [`Event`], ...);
 //! - `adaptive.rs`: the adaptive schedule of a pull or release ([`Phase`]);
@@ -20,7 +31,7 @@ mod travel;
 mod twist;
 
 pub use crate::snapshot::{Snapshot, SnapshotContact};
-pub use adaptive::{ADAPTIVE_MAX_MU, ADAPTIVE_MAX_RATE, Phase, pulls_fast};
+pub use adaptive::{ADAPTIVE_MAX_MU, ADAPTIVE_MAX_RATE, MAX_RESTARTS, Outcome, Phase, pulls_fast};
 pub use report::{
     CaseReport, Event, EventKind, Hysteresis, PhaseSpan, Progress, QUASI_STATIC_LIMIT, QuasiStatic, Scaling,
     Stats, Status,
@@ -51,7 +62,8 @@ pub fn work_estimate(params: &CaseParams) -> f64 {
 /// sample and returns `false` to cancel.
 ///
 /// A short rod with one pass, pulled quickly at a constant speed (the
-/// reference protocol: no stage goes back) until l_k bar falls below 130:
+/// reference protocol: no stage goes back) until the knot's own length
+/// (`measurements::l_k_arc_bar`) falls below 130:
 /// ```
 /// use solver::case::{CaseParams, Protocol};
 /// use solver::protocol::{self, Status};
@@ -76,7 +88,8 @@ pub fn work_estimate(params: &CaseParams) -> f64 {
 /// assert_eq!(report.series.len(), samples);
 /// let l_k_bar: Vec<f64> = report.series.iter().map(|s| s.l_k_bar).collect();
 /// assert!(l_k_bar.windows(2).all(|w| w[1] < w[0]), "the pull shortens the knot");
-/// assert!(l_k_bar[0] > 135.0 && l_k_bar[l_k_bar.len() - 1] < 130.0);
+/// let last = &report.series[report.series.len() - 1];
+/// assert!(l_k_bar[0] > 135.0 && last.l_k_arc_bar < 130.0 && last.l_k_bar < 130.0);
 /// ```
 pub fn run(params: &CaseParams, observer: &mut dyn FnMut(&Progress) -> bool) -> CaseReport {
     let started = std::time::Instant::now();

@@ -1,7 +1,7 @@
 //! What a case reports: how it ended, its series (eq. 11 and the energies),
 //! its events, the snapshots kept for viewers, how it was computed and
 //! whether it stayed quasi-static.
-use super::adaptive::Phase;
+use super::adaptive::{Outcome, Phase};
 use crate::case::{CaseParams, Direction};
 use crate::knot::Alexander;
 use crate::measurements::{Inversion, Sample};
@@ -49,6 +49,10 @@ pub struct Stats {
     /// Contact-solve sweeps summed over the loading steps.
     pub contact_sweeps: u64,
     pub relax_steps: u64,
+    /// Times a stage of the adaptive pull went back to a checkpoint (at most
+    /// `MAX_RESTARTS` per stage).
+    #[serde(default)]
+    pub restarts: u64,
     /// Steps redone with half the step (adaptive time step).
     pub rejected_steps: u64,
     /// Smallest time step taken (s).
@@ -85,6 +89,10 @@ pub struct Event {
     /// whose kinetic energy spikes (at least `InversionCriteria::kinetic_energy_spike`
     /// times its median before).
     pub clean: bool,
+    /// Restarts from a checkpoint the stage took until the event was found
+    /// (the adaptive pull; at most `MAX_RESTARTS`).
+    #[serde(default)]
+    pub restarts: u32,
 }
 
 /// The loop's hysteresis: it snapped at `inversion_l_k_bar` while tightened
@@ -208,6 +216,26 @@ pub struct PhaseSpan {
     pub steps: u64,
     pub newton_iterations: u64,
     pub contact_sweeps: u64,
+    /// How the adaptive schedule ended it (`None`: it ran its course).
+    #[serde(default)]
+    pub outcome: Option<Outcome>,
+}
+
+impl PhaseSpan {
+    /// A new span of `phase` in program stage `stage` (`None`: relaxing),
+    /// starting at `l_k_bar`.
+    pub(super) fn new(phase: Phase, stage: Option<usize>, l_k_bar: f64) -> Self {
+        Self {
+            phase,
+            stage,
+            from_l_k_bar: l_k_bar,
+            to_l_k_bar: l_k_bar,
+            steps: 0,
+            newton_iterations: 0,
+            contact_sweeps: 0,
+            outcome: None,
+        }
+    }
 }
 
 /// Progress handed to the caller after every sample.
@@ -259,7 +287,7 @@ pub const QUASI_STATIC_LIMIT: f64 = 5e-3;
 
 /// The measured quasi-staticity of a loading: the kinetic energy (each
 /// sample's largest since the one before) over the elastic energy, median
-/// over the samples taken at `pull_speed` (phases `reference` and `snap`) up
+/// over the samples taken at `pull_speed` (phases `reference`, `snap` and `fallback`) up
 /// to each stage's first event. A snap and the stick-slip of friction are
 /// dynamic events of a quasi-static pull: the median sees past them.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -285,7 +313,7 @@ impl QuasiStatic {
         };
         let mut ratios: Vec<f64> = (report.series.iter().enumerate().zip(phases))
             .filter(|((i, s), phase)| {
-                matches!(phase, Phase::Reference | Phase::Snap)
+                matches!(phase, Phase::Reference | Phase::Snap | Phase::Fallback)
                     && s.elastic_bar() > 0.0
                     && first_event(s.stage).is_none_or(|e| *i < e)
             })

@@ -1,8 +1,8 @@
 //! A case's run: the knot built and clamped, relaxed, then its loading
 //! program walked stage by stage; the steps, samples and checks every stage
 //! shares; the report at the end.
-use super::adaptive::{Phase, RELAX_DAMPING, span};
-use super::report::{CaseReport, Event, Progress, QuasiStatic, Scaling, Status};
+use super::adaptive::{Outcome, Phase, RELAX_DAMPING};
+use super::report::{CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::gauss_seidel::GaussSeidelOptions;
@@ -186,7 +186,8 @@ pub(super) struct Case<'a> {
     pub(super) scales: Scales,
     /// Unit vector from the start clamp to the finish clamp.
     pub(super) axis: Vector3<f64>,
-    /// The program, where it started (l_k bar) and the stage being run.
+    /// The program, where it started (the knot's own length) and the stage
+    /// being run.
     pub(super) program: Vec<LoadStage>,
     pub(super) program_start: f64,
     pub(super) stage: usize,
@@ -239,6 +240,12 @@ impl<'a> Case<'a> {
     pub(super) fn l_k_bar(&self) -> f64 {
         let r = &self.world.rods[0];
         (self.params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / self.params.h
+    }
+
+    /// The knot's own length, which the stopping rules and the adaptive
+    /// schedule's windows act on (`measurements::l_k_arc_bar`).
+    pub(super) fn l_k_arc_bar(&self) -> f64 {
+        measurements::l_k_arc_bar(&self.world.rods[0].positions(), self.params.h)
     }
 
     /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h
@@ -336,7 +343,7 @@ impl<'a> Case<'a> {
     /// The loading program, stage by stage; the knot's type is checked at
     /// the end.
     fn program(&mut self, observer: &mut Observer) -> Result<(), Ending> {
-        self.program_start = self.l_k_bar();
+        self.program_start = self.l_k_arc_bar();
         for index in 0..self.program.len() {
             self.stage = index;
             match self.program[index] {
@@ -417,7 +424,14 @@ impl<'a> Case<'a> {
     /// A new entry in the report's phases, from here.
     fn begin(&mut self, phase: Phase, stage: Option<usize>) {
         let at = self.l_k_bar();
-        self.report.phases.push(span(phase, stage, at));
+        self.report.phases.push(PhaseSpan::new(phase, stage, at));
+    }
+
+    /// Ends the current phase's span with `outcome`.
+    pub(super) fn end_phase(&mut self, outcome: Outcome) {
+        if let Some(span) = self.report.phases.last_mut() {
+            span.outcome = Some(outcome);
+        }
     }
 
     /// Counts `step` in the current phase, which now ends here.
@@ -473,6 +487,7 @@ impl<'a> Case<'a> {
         self.report.series.push(Sample {
             time: c.time,
             l_k_bar,
+            l_k_arc_bar: measurements::l_k_arc_bar(&points, params.h),
             l_c_over_l: 1.0 - l_k_bar * params.h / params.length,
             force,
             f_bar: force / force_unit(params),

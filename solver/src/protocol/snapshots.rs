@@ -1,11 +1,11 @@
 //! The snapshots a report keeps for viewers (the size budget: about 50 kB
 //! each at K = 301): one every `SNAPSHOT_SPACING` in l_k bar along a stage,
 //! and every `EVENT_SPACING` within `EVENT_WINDOW` either side of each
-//! stage's event, so that a viewer steps through the snap.
+//! stage's event, so that a viewer steps through the snap. The stage detects
+//! its events ([`super::events`]) and hands each one here when it is found.
 use super::adaptive::Way;
-use super::report::EventKind;
+use super::report::{Event, EventKind};
 use super::runner::{Case, SNAPSHOT_HISTORY};
-use super::travel::Travel;
 use crate::snapshot::Snapshot;
 
 const SNAPSHOT_SPACING: f64 = 20.0;
@@ -15,14 +15,17 @@ const EVENT_WINDOW: f64 = 10.0;
 /// Where a stage's next snapshots are due.
 #[derive(Clone, Debug)]
 pub(super) struct SnapshotPlan {
+    way: Way,
     next: f64,
-    /// After the event: the next dense snapshot and where the dense ones stop.
-    after_event: Option<(f64, f64)>,
+    /// After the event: its kind, the next dense snapshot and where the dense
+    /// ones stop.
+    after_event: Option<(EventKind, f64, f64)>,
 }
 
 impl SnapshotPlan {
     pub(super) fn new(way: Way, start: f64) -> Self {
         Self {
+            way,
             next: way.on(start, SNAPSHOT_SPACING),
             after_event: None,
         }
@@ -30,9 +33,10 @@ impl SnapshotPlan {
 }
 
 impl Case<'_> {
-    /// Keeps the sample's snapshot in the history, detects the stage's event
-    /// and keeps the snapshots around it, and the stage's periodic ones.
-    pub(super) fn keep_snapshots(&mut self, travel: &mut Travel, l_k_bar: f64) {
+    /// Keeps the sample's snapshot in the history; the snapshots around
+    /// `found`, the stage's event found at this sample, and after it; and the
+    /// stage's periodic ones.
+    pub(super) fn keep_snapshots(&mut self, plan: &mut SnapshotPlan, found: Option<Event>, l_k_bar: f64) {
         let history = &mut self.carried.history;
         if history.len() == SNAPSHOT_HISTORY {
             history.pop_front();
@@ -43,14 +47,11 @@ impl Case<'_> {
             l_k_bar,
             self.clock.elapsed,
         ));
-        let way = travel.way;
-        if travel.event.is_none() {
-            if let Some(event) = self.detect(travel) {
-                self.event_snapshots(travel, event.kind, event.at.l_k_bar);
-            }
-        } else if let Some((next, end)) = travel.snapshots.after_event {
+        let way = plan.way;
+        if let Some(event) = found {
+            self.event_snapshots(plan, event.kind, event.at.l_k_bar);
+        } else if let Some((kind, next, end)) = plan.after_event {
             if way.reached(l_k_bar, next) && !way.past(l_k_bar, end) {
-                let kind = travel.event.map_or(EventKind::Inversion, |e| e.kind);
                 let label = format!("after_{kind}");
                 self.report.snapshots.push(Snapshot::capture(
                     &self.world,
@@ -58,22 +59,22 @@ impl Case<'_> {
                     l_k_bar,
                     self.clock.elapsed,
                 ));
-                travel.snapshots.after_event = Some((way.on(l_k_bar, EVENT_SPACING), end));
+                plan.after_event = Some((kind, way.on(l_k_bar, EVENT_SPACING), end));
             }
         }
-        if way.reached(l_k_bar, travel.snapshots.next) {
+        if way.reached(l_k_bar, plan.next) {
             let label = self.program[self.stage].name();
             self.report
                 .snapshots
                 .push(Snapshot::capture(&self.world, label, l_k_bar, self.clock.elapsed));
-            travel.snapshots.next = way.on(l_k_bar, SNAPSHOT_SPACING);
+            plan.next = way.on(l_k_bar, SNAPSHOT_SPACING);
         }
     }
 
     /// The snapshots either side of the event at `at`, taken from the
     /// history (the detection lags the event).
-    fn event_snapshots(&mut self, travel: &mut Travel, kind: EventKind, at: f64) {
-        let way = travel.way;
+    fn event_snapshots(&mut self, plan: &mut SnapshotPlan, kind: EventKind, at: f64) {
+        let way = plan.way;
         let mut stored: Vec<f64> = Vec::new();
         let mut offset = EVENT_WINDOW;
         while offset >= -EVENT_WINDOW {
@@ -106,6 +107,6 @@ impl Case<'_> {
             .iter()
             .copied()
             .fold(at, |a, b| if way.past(b, a) { b } else { a });
-        travel.snapshots.after_event = Some((way.on(furthest, EVENT_SPACING), way.on(at, EVENT_WINDOW)));
+        plan.after_event = Some((kind, way.on(furthest, EVENT_SPACING), way.on(at, EVENT_WINDOW)));
     }
 }

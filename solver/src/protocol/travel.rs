@@ -1,10 +1,14 @@
 //! A stage that moves the clamps along the pull: a pull (tightening), a
 //! release (loosening) or a soft stage (the grips moving, the clamps on
-//! springs). Samples every `sample_interval` in l_k bar; events are detected
-//! in the stage's own samples; the adaptive schedule ([`super::adaptive`])
-//! runs pulls and releases fast far from them.
+//! springs). Samples every `sample_interval` in l_k bar (the clamps' travel);
+//! stops where the knot's own length l_k arc bar reaches the stage's target or
+//! the stopping rules (a rod longer than its knot stops where the paper's rod
+//! would, its tails' stretch aside); events are detected in the stage's own
+//! samples; the adaptive schedule ([`super::adaptive`]) runs pulls and
+//! releases fast far from them.
 use super::adaptive::{
-    self, Checkpoints, END_REVIEW, FALSE_ALARM, MIN_LEAD, Phase, SETTLE_TIME, SLOW_AFTER, Way,
+    self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
+    SLOW_AFTER, Way,
 };
 use super::events;
 use super::report::Event;
@@ -18,20 +22,28 @@ use crate::time_step::TimeStep;
 /// Where a stage stands between samples, kept in checkpoints.
 #[derive(Clone)]
 pub(super) struct Travel {
-    pub(super) way: Way,
+    way: Way,
     /// The series index of the stage's first sample.
     first_sample: usize,
     next_sample: f64,
-    pub(super) snapshots: SnapshotPlan,
+    snapshots: SnapshotPlan,
     phase: Phase,
-    /// l_k bar where `phase` began.
+    /// l_k bar where `phase` began (its speed ramps from there), and the
+    /// knot's own length there.
     phase_start: f64,
-    /// Where the fast approach saw the event that the snap phase is resolving.
+    phase_start_arc: f64,
+    /// Where (the knot's own length) the fast approach saw the event that
+    /// the slow phase is resolving.
     fast_event: Option<f64>,
     /// The stage's first event.
-    pub(super) event: Option<Event>,
+    event: Option<Event>,
     /// The stage's end has been redone slowly (`review_end`).
     reviewed: bool,
+    /// The series index from which the fast approach watches for a smeared
+    /// snap: past a fall the slow phase refuted.
+    watch_from: usize,
+    /// Restarts the stage has taken (carried over a restore).
+    restarts: u32,
 }
 
 /// The state a fast approach can return to.
@@ -66,19 +78,23 @@ impl Case<'_> {
         if let LoadStage::Soft(s) = stage {
             self.mount_springs(s.stiffness_bar);
         }
-        let start = self.l_k_bar();
+        let (start, start_arc) = (self.l_k_bar(), self.l_k_arc_bar());
+        let first_sample = self.report.series.len();
         let mut travel = Travel {
             way,
-            first_sample: self.report.series.len(),
+            first_sample,
             next_sample: start,
             snapshots: SnapshotPlan::new(way, start),
             phase,
             phase_start: start,
+            phase_start_arc: start_arc,
             fast_event: None,
             event: None,
             reviewed: false,
+            watch_from: first_sample,
+            restarts: 0,
         };
-        self.enter(&mut travel, phase, start);
+        self.enter(&mut travel, phase);
         let mut saved = Checkpoints::new(start);
         let ending = loop {
             let (step, dt) = self.step(travel.phase)?;
@@ -88,17 +104,19 @@ impl Case<'_> {
             }
             travel.next_sample = way.on(l_k_bar, self.params.sample_interval);
             let points = self.sample(travel.phase, &step, dt, l_k_bar);
-            self.keep_snapshots(&mut travel, l_k_bar);
+            let found = self.detect(&mut travel);
+            self.keep_snapshots(&mut travel.snapshots, found, l_k_bar);
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
+            let sample = self.report.series.last().copied().unwrap_or_default();
+            let arc = sample.l_k_arc_bar;
             let stop = self.stop_at(&travel, target);
-            let within = way.along(start, l_k_bar) / way.along(start, stop);
+            let within = way.along(start_arc, arc) / way.along(start_arc, stop);
             self.observe(observer, &points, l_k_bar, within)?;
-            if self.schedule(&mut travel, &mut saved, l_k_bar)? {
+            if self.schedule(&mut travel, &mut saved, l_k_bar, arc)? {
                 continue;
             }
-            let sample = self.report.series.last().copied().unwrap_or_default();
             let tight = way.0 > 0.0 && self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
-            if (way.reached(l_k_bar, stop) || tight) && !self.review_end(&mut travel, &mut saved, l_k_bar)? {
+            if (way.reached(arc, stop) || tight) && !self.review_end(&mut travel, &mut saved, arc)? {
                 break Ok(());
             }
         };
@@ -108,98 +126,136 @@ impl Case<'_> {
         ending
     }
 
-    /// Where the current stage stops: its target; a tightening without one
-    /// at the stopping rules (`min_l_k_bar`, or `stop_after_inversion` past
-    /// its inversion).
+    /// Where (the knot's own length) the current stage stops: its target; a
+    /// tightening without one at the stopping rules (`min_l_k_bar`, or
+    /// `stop_after_inversion` past its inversion).
     fn stop_at(&self, travel: &Travel, target: Option<f64>) -> f64 {
         let floor = self.params.min_l_k_bar;
         match (target, travel.event, self.params.stop_after_inversion) {
             (Some(x), ..) if travel.way.0 < 0.0 => x,
             (Some(x), ..) => x.max(floor),
-            (None, Some(e), Some(margin)) => (e.at.l_k_bar - margin).max(floor),
+            (None, Some(e), Some(margin)) => (e.at.l_k_arc_bar - margin).max(floor),
             (None, ..) => floor,
         }
     }
 
-    /// The adaptive schedule's moves after a sample at `l_k_bar`: back to a
-    /// checkpoint when the fast approach sees an event (returns `true`),
-    /// checkpoints while fast, fast again past the event or after a false
-    /// alarm; otherwise the clamps' speed.
+    /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
+    /// own length `arc`: back to a checkpoint when the fast approach sees an
+    /// event (returns `true`), checkpoints while fast, fast again past the
+    /// event or after a false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
         travel: &mut Travel,
         saved: &mut Checkpoints<Checkpoint>,
         l_k_bar: f64,
+        arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
-            if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.first_sample..]) {
-                if let Some(c) = saved.before(way, way.back(began, way.restart_before())) {
-                    self.restore(c, travel)?;
-                    travel.fast_event = Some(fell);
+            if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
+                let back = way.back(began, way.restart_before());
+                if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
                     return Ok(true);
                 }
             }
         }
         match (travel.phase, travel.event) {
             (Phase::Approach, Some(event)) => {
-                if let Some(c) = saved.before(way, way.back(event.at.l_k_bar, way.restart_before())) {
-                    self.restore(c, travel)?;
-                    travel.fast_event = Some(event.at.l_k_bar);
+                let (at, back) = (event.at.l_k_arc_bar, way.restart_before());
+                if self.restart(travel, saved, way.back(at, back), Some(at), Outcome::Restarted)? {
                     return Ok(true);
                 }
             }
             (Phase::Approach, None) if way.reached(l_k_bar, saved.next) => {
                 let state = self.checkpoint(travel);
-                saved.keep(way, l_k_bar, state);
+                saved.keep(way, l_k_bar, arc, state);
             }
             (Phase::Snap, Some(event))
-                if !way.reached(event.at.l_k_bar, way.on(travel.phase_start, MIN_LEAD))
+                if !way.reached(event.at.l_k_arc_bar, way.on(travel.phase_start_arc, MIN_LEAD))
                     && !saved.list.is_empty() =>
             {
                 // The slow phase met its event right after its restart: the
                 // restart was already past the fold. Go back further.
-                if let Some(c) = saved.before(way, way.back(travel.phase_start, way.restart_before())) {
-                    let fast = travel.fast_event;
-                    self.restore(c, travel)?;
-                    travel.fast_event = fast;
+                let (back, fast) = (
+                    way.back(travel.phase_start_arc, way.restart_before()),
+                    travel.fast_event,
+                );
+                if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
                     return Ok(true);
                 }
             }
-            (Phase::Snap, Some(event)) if way.reached(l_k_bar, way.on(event.at.l_k_bar, SLOW_AFTER)) => {
-                self.enter(travel, Phase::After, l_k_bar);
+            (Phase::Snap | Phase::Fallback, Some(event))
+                if way.reached(arc, way.on(event.at.l_k_arc_bar, SLOW_AFTER)) =>
+            {
+                self.end_phase(Outcome::Confirmed);
+                self.enter(travel, Phase::After);
             }
-            (Phase::Snap, None)
+            (Phase::Snap | Phase::Fallback, None)
                 if travel
                     .fast_event
-                    .is_some_and(|f| way.past(l_k_bar, way.on(f, FALSE_ALARM))) =>
+                    .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
             {
-                // The fast pull's event was its own swinging: approach again.
-                self.enter(travel, Phase::Approach, l_k_bar);
-                saved.next = l_k_bar;
+                self.end_phase(Outcome::Refuted);
+                travel.fast_event = None;
+                if travel.phase == Phase::Snap {
+                    // The fast pull's event was its own swinging: approach
+                    // again, no longer watching the fall it saw.
+                    travel.watch_from = self.report.series.len();
+                    self.enter(travel, Phase::Approach);
+                    saved.next = l_k_bar;
+                } else {
+                    // No restart left: the reference pull to the stage's end.
+                    self.enter(travel, Phase::Reference);
+                }
             }
             _ => self.drive(travel, l_k_bar),
         }
         Ok(false)
     }
 
+    /// Back to the latest checkpoint at or before `before` (the knot's own
+    /// length), the fast pull's event at `fast_event`, ending the current
+    /// phase with `outcome`; `false` when no checkpoint or no restart is left.
+    fn restart(
+        &mut self,
+        travel: &mut Travel,
+        saved: &mut Checkpoints<Checkpoint>,
+        before: f64,
+        fast_event: Option<f64>,
+        outcome: Outcome,
+    ) -> Result<bool, Ending> {
+        if travel.restarts >= MAX_RESTARTS {
+            return Ok(false);
+        }
+        let Some(c) = saved.before(travel.way, before) else {
+            return Ok(false);
+        };
+        self.end_phase(outcome);
+        self.restore(c, travel)?;
+        travel.fast_event = fast_event;
+        Ok(true)
+    }
+
     /// At the stop condition: a fast approach without an event redoes the
-    /// last `END_REVIEW` of the stage from a checkpoint, once, slowly to the
-    /// end (returns `true`).
+    /// last `END_REVIEW` of the stage (the knot's own length, from `arc`)
+    /// from a checkpoint, once, slowly to the end (returns `true`); not when
+    /// a slow phase went through most of it (refuted within `END_REVIEW` of
+    /// the end).
     fn review_end(
         &mut self,
         travel: &mut Travel,
         saved: &mut Checkpoints<Checkpoint>,
-        l_k_bar: f64,
+        arc: f64,
     ) -> Result<bool, Ending> {
-        if travel.phase != Phase::Approach || travel.reviewed {
+        let refuted = travel.watch_from > travel.first_sample;
+        let fast_since = travel.way.along(travel.phase_start_arc, arc);
+        if travel.phase != Phase::Approach || travel.reviewed || (refuted && fast_since < END_REVIEW) {
             return Ok(false);
         }
-        let Some(c) = saved.before(travel.way, travel.way.back(l_k_bar, END_REVIEW)) else {
+        let back = travel.way.back(arc, END_REVIEW);
+        if !self.restart(travel, saved, back, None, Outcome::Restarted)? {
             return Ok(false);
-        };
-        self.restore(c, travel)?;
-        travel.fast_event = None;
+        }
         travel.reviewed = true;
         Ok(true)
     }
@@ -217,12 +273,13 @@ impl Case<'_> {
         }
     }
 
-    /// Enters `phase` at `l_k_bar` with the clamps at its speed.
-    fn enter(&mut self, travel: &mut Travel, phase: Phase, l_k_bar: f64) {
+    /// Enters `phase` here, with the clamps at its speed.
+    fn enter(&mut self, travel: &mut Travel, phase: Phase) {
         self.enter_phase(phase);
         travel.phase = phase;
-        travel.phase_start = l_k_bar;
-        self.drive(travel, l_k_bar);
+        travel.phase_start = self.l_k_bar();
+        travel.phase_start_arc = self.l_k_arc_bar();
+        self.drive(travel, travel.phase_start);
     }
 
     /// Both clamps (or, on springs, both grips) moving along the stage at the
@@ -244,24 +301,34 @@ impl Case<'_> {
     /// Back to checkpoint `c` of a fast approach, to move slowly through the
     /// event: the series, snapshots and events after it are dropped, and the
     /// knot settles with the clamps held (the fast pull leaves it swinging)
-    /// before the snap phase starts.
-    fn restore(&mut self, (at, c): (f64, Checkpoint), travel: &mut Travel) -> Result<(), Ending> {
+    /// before the snap phase starts, or the fallback on the stage's last
+    /// restart.
+    fn restore(&mut self, c: Checkpoint, travel: &mut Travel) -> Result<(), Ending> {
+        let restarts = travel.restarts + 1;
         self.world = c.world;
         self.clock = c.clock;
         self.carried = c.carried;
         *travel = c.travel;
+        travel.restarts = restarts;
+        self.report.stats.restarts += 1;
         self.report.series.truncate(c.series);
         self.sample_phases.truncate(c.series);
         self.report.snapshots.truncate(c.snapshots);
         self.report.events.truncate(c.events);
-        self.enter(travel, Phase::Settle, at);
+        self.enter(travel, Phase::Settle);
         self.settle(SETTLE_TIME * self.scales.time_unit)?;
-        self.enter(travel, Phase::Snap, at);
+        let slow = if restarts < MAX_RESTARTS {
+            Phase::Snap
+        } else {
+            Phase::Fallback
+        };
+        self.enter(travel, slow);
         Ok(())
     }
 
-    /// Detects the current stage's first event in its own samples.
-    pub(super) fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
+    /// Detects the current stage's first event in its own samples; returns
+    /// it when found at this sample.
+    fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
         if travel.event.is_some() {
             return None;
         }
@@ -272,7 +339,11 @@ impl Case<'_> {
             travel.way,
             &criteria,
             self.stage,
-        );
+        )
+        .map(|e| Event {
+            restarts: travel.restarts,
+            ..e
+        });
         travel.event = found;
         if let Some(event) = found {
             self.record(event);

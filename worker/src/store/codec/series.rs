@@ -1,19 +1,22 @@
 //! A series, losslessly: column by column in [`COLUMNS`] order, every value
 //! a 64-bit word (a real's IEEE bits, a count as an integer) less the
 //! column's previous word (wrapping), so that a slowly varying column leaves
-//! its high bytes zero, then byte-shuffled and deflated.
+//! its high bytes zero, then byte-shuffled and deflated. Series packed
+//! before the knot's own length was measured (format 1) read with it 0.
 use super::CodecError;
 use super::planes::{Packer, Unpacker};
 use solver::measurements::{COLUMNS, Column, Sample};
 
-/// The packed form's format byte.
-const FORMAT: u8 = 1;
+/// The packed form's format byte, and the format without `l_k_arc_bar`.
+const FORMAT: u8 = 2;
+const FORMAT_WITHOUT_ARC: u8 = 1;
 
 /// Writes each column's word back into a sample: one per [`COLUMNS`] entry,
 /// in its order.
 const SETTERS: [fn(&mut Sample, u64); COLUMNS.len()] = [
     |s, w| s.time = f64::from_bits(w),
     |s, w| s.l_k_bar = f64::from_bits(w),
+    |s, w| s.l_k_arc_bar = f64::from_bits(w),
     |s, w| s.l_c_over_l = f64::from_bits(w),
     |s, w| s.force = f64::from_bits(w),
     |s, w| s.f_bar = f64::from_bits(w),
@@ -49,9 +52,14 @@ fn word(column: &Column, s: &Sample) -> u64 {
 
 /// The series packed: the sample count, then the columns.
 pub fn pack_series(series: &[Sample]) -> Vec<u8> {
+    pack(series, COLUMNS.iter().map(|(_, column)| column), FORMAT)
+}
+
+/// `series` packed by `columns`, behind `format`.
+fn pack<'c>(series: &[Sample], columns: impl Iterator<Item = &'c Column>, format: u8) -> Vec<u8> {
     let mut p = Packer::default();
     p.u64s([series.len() as u64]);
-    for (_, column) in &COLUMNS {
+    for column in columns {
         let mut previous = 0u64;
         p.u64s(series.iter().map(|s| {
             let w = word(column, s);
@@ -60,20 +68,24 @@ pub fn pack_series(series: &[Sample]) -> Vec<u8> {
             delta
         }));
     }
-    p.finish(FORMAT)
+    p.finish(format)
 }
 
 /// The series [`pack_series`] packed, bit for bit.
 pub fn unpack_series(packed: &[u8]) -> Result<Vec<Sample>, CodecError> {
-    let mut u = Unpacker::new(packed, FORMAT)?;
+    let format = match packed.first() {
+        Some(&FORMAT_WITHOUT_ARC) => FORMAT_WITHOUT_ARC,
+        _ => FORMAT,
+    };
+    let mut u = Unpacker::new(packed, format)?;
     let n = usize::try_from(u.u64s(1)?[0]).map_err(|_| CodecError::Truncated)?;
-    let mut series = Vec::new();
+    let mut series = vec![Sample::default(); n];
     for (c, set) in SETTERS.iter().enumerate() {
+        if format == FORMAT_WITHOUT_ARC && COLUMNS[c].0 == "l_k_arc_bar" {
+            continue;
+        }
         let mut previous = 0u64;
         let words = u.u64s(n)?;
-        if c == 0 {
-            series = vec![Sample::default(); n];
-        }
         for (s, delta) in series.iter_mut().zip(words) {
             previous = previous.wrapping_add(delta);
             set(s, previous);
@@ -116,6 +128,24 @@ mod tests {
         assert_eq!(unpack_series(&pack_series(&series)).unwrap(), series);
     }
 
+    /// A series packed before `l_k_arc_bar` (format 1: the other columns
+    /// in order) reads with it 0.
+    #[test]
+    fn a_series_packed_without_the_knots_own_length_reads() {
+        let series: Vec<Sample> = (0..5).map(distinct).collect();
+        let columns = (COLUMNS.iter())
+            .filter(|(name, _)| *name != "l_k_arc_bar")
+            .map(|(_, column)| column);
+        let old = unpack_series(&pack(&series, columns, FORMAT_WITHOUT_ARC)).unwrap();
+        let expected: Vec<Sample> = (series.iter())
+            .map(|s| Sample {
+                l_k_arc_bar: 0.0,
+                ..*s
+            })
+            .collect();
+        assert_eq!(old, expected);
+    }
+
     #[test]
     fn an_empty_series_packs() {
         assert_eq!(unpack_series(&pack_series(&[])).unwrap(), []);
@@ -124,7 +154,7 @@ mod tests {
     fn sample() -> impl Strategy<Value = Sample> {
         (
             prop::array::uniform16(any::<f64>()),
-            prop::array::uniform5(any::<f64>()),
+            prop::array::uniform6(any::<f64>()),
             (any::<u32>(), any::<u32>(), any::<u32>(), any::<u8>()),
         )
             .prop_map(|(a, b, (contacts, active, newton, stage))| {

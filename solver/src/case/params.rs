@@ -2,7 +2,8 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FrictionLaw, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol,
+    Candidates, ContactSolve, FrictionLaw, Geometry, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError,
+    Protocol,
 };
 use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
 use serde::{Deserialize, Serialize};
@@ -26,6 +27,8 @@ pub struct CaseParams {
     pub contact_solve: ContactSolve,
     /// Which pairs get a contact force.
     pub contact_candidates: Candidates,
+    /// Which centre lines contacts are computed between.
+    pub contact_geometry: Geometry,
     /// Start twist (turns); `None`: the paper's code's.
     pub start_twist: Option<f64>,
     /// Gravitational acceleration (m/s^2).
@@ -86,6 +89,7 @@ impl Default for CaseParams {
             rolling: false,
             contact_solve: ContactSolve::default(),
             contact_candidates: Candidates::default(),
+            contact_geometry: Geometry::default(),
             start_twist: None,
             gravity: [0.0; 3],
             length: 1.0,
@@ -216,6 +220,21 @@ pub const PARAMETERS: &[Parameter] = &[
               fixed (adaptive_dt false) and the reference protocol, \"predicted\" is the paper's code's scheme: \
               its inversions are in docs/VALIDATION.md (\"Sensitivity\"), beside the paper's code's in \
               docs/FIDELITY.md.",
+        value: UNCHECKED,
+    },
+    Parameter {
+        name: "contact_geometry",
+        group: Group::Solver,
+        unit: "",
+        default: "\"segment\"",
+        range: Range::Words(&["smooth", "segment"]),
+        null: None,
+        paper: "\"segment\"",
+        doc: "Which centre lines contacts are computed between: \"smooth\" (the C1 Catmull-Rom curves through the \
+              nodes: gap, normal and the forces' weights on the nodes vary smoothly as one rod slides along another, \
+              so force curves carry no sawtooth of one edge's period) or \"segment\" (the paper's: the straight \
+              segments between the nodes, whose kinks and sag make a sliding contact ride a washboard; \
+              docs/FIDELITY.md).",
         value: UNCHECKED,
     },
     Parameter {

@@ -1,8 +1,6 @@
 //! The narrow phase's choices (paper Sec. 3.2): which candidate pairs from
 //! the broad phase become contacts, and eq. (9)'s sliding direction.
 use super::broad_phase::{CandidatePair, Segment};
-use super::segment::SegmentPair;
-use crate::rod::Rod;
 use nalgebra::Vector3;
 
 /// Whether candidate `k` duplicates a neighbour: its closest point lies on a
@@ -10,8 +8,15 @@ use nalgebra::Vector3;
 /// pairs with the same partner. Such an endpoint pair has a normal tilted
 /// towards the node, and closing its linearised gap would push back on a rod
 /// sliding smoothly from one segment onto the next. When both pairs meet at the
-/// shared node, the one with the lower segment index is kept.
-pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
+/// shared node, the one with the lower segment index is kept. `params(m)` is
+/// pair `m`'s closest points' parameters `(s, t)` on its two segments (or on
+/// the smooth centre lines' pieces over them).
+pub(crate) fn redundant(
+    pairs: &[CandidatePair],
+    k: usize,
+    segments: &[Segment],
+    params: &impl Fn(usize) -> (f64, f64),
+) -> bool {
     const END: f64 = 1e-9;
     let p = &pairs[k];
     let find = |i: usize, j: usize| {
@@ -22,7 +27,8 @@ pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment])
             .map(|m| (m, key.0 == i))
     };
     // (this segment, partner, parameter on this segment)
-    for (me, other, param) in [(p.i, p.j, p.closest.s), (p.j, p.i, p.closest.t)] {
+    let (s, t) = params(k);
+    for (me, other, param) in [(p.i, p.j, s), (p.j, p.i, t)] {
         let seg = &segments[me];
         let neighbour = if param <= END {
             me.checked_sub(1)
@@ -40,8 +46,8 @@ pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment])
             continue;
         }
         if let Some((m, n_is_first)) = find(n, other) {
-            let q = &pairs[m];
-            let n_param = if n_is_first { q.closest.s } else { q.closest.t };
+            let (qs, qt) = params(m);
+            let n_param = if n_is_first { qs } else { qt };
             let n_at_shared = if n < me {
                 n_param >= 1.0 - END
             } else {
@@ -55,21 +61,10 @@ pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment])
     false
 }
 
-/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of the relative
-/// velocity of the closest points (A relative to B) at the start of the
-/// step; zero when there is none.
-pub(crate) fn sliding_direction(
-    rods: &[Rod],
-    sa: &Segment,
-    sb: &Segment,
-    closest: &SegmentPair,
-    normal: &Vector3<f64>,
-) -> Vector3<f64> {
-    let (ra, rb) = (&rods[sa.body], &rods[sb.body]);
-    let (s, t) = (closest.s, closest.t);
-    let u = (1.0 - s) * ra.node_velocity(sa.index) + s * ra.node_velocity(sa.index + 1)
-        - (1.0 - t) * rb.node_velocity(sb.index)
-        - t * rb.node_velocity(sb.index + 1);
+/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of `u`, the relative
+/// velocity of the contact points (A relative to B) at the start of the
+/// step, against the contact's unit `normal`; zero when there is none.
+pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vector3<f64> {
     let ut = u - normal * u.dot(normal);
     let norm = ut.norm();
     if norm > 0.0 { ut / norm } else { Vector3::zeros() }

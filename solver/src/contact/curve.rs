@@ -347,7 +347,7 @@ mod tests {
     #[test]
     fn closest_points_are_minima() {
         let mut rng = StdRng::seed_from_u64(2);
-        let mut random_unit = |rng: &mut StdRng| -> Vector3<f64> {
+        let random_unit = |rng: &mut StdRng| -> Vector3<f64> {
             Vector3::new(
                 rng.gen_range(-1.0..1.0),
                 rng.gen_range(-1.0..1.0),
@@ -357,7 +357,7 @@ mod tests {
         };
         for (turn, global) in [(0.6, false), (0.15, true)] {
             for _ in 0..300 {
-                let mut curve = |rng: &mut StdRng| {
+                let curve = |rng: &mut StdRng| {
                     let mut dir = random_unit(rng);
                     let mut x =
                         vec![2.0 * Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 0.0)];

@@ -8,15 +8,8 @@ use nalgebra::Vector3;
 /// pairs with the same partner. Such an endpoint pair has a normal tilted
 /// towards the node, and closing its linearised gap would push back on a rod
 /// sliding smoothly from one segment onto the next. When both pairs meet at the
-/// shared node, the one with the lower segment index is kept. `params(m)` is
-/// pair `m`'s closest points' parameters `(s, t)` on its two segments (or on
-/// the smooth centre lines' pieces over them).
-pub(crate) fn redundant(
-    pairs: &[CandidatePair],
-    k: usize,
-    segments: &[Segment],
-    params: &impl Fn(usize) -> (f64, f64),
-) -> bool {
+/// shared node, the one with the lower segment index is kept.
+pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment]) -> bool {
     const END: f64 = 1e-9;
     let p = &pairs[k];
     let find = |i: usize, j: usize| {
@@ -27,8 +20,7 @@ pub(crate) fn redundant(
             .map(|m| (m, key.0 == i))
     };
     // (this segment, partner, parameter on this segment)
-    let (s, t) = params(k);
-    for (me, other, param) in [(p.i, p.j, s), (p.j, p.i, t)] {
+    for (me, other, param) in [(p.i, p.j, p.closest.s), (p.j, p.i, p.closest.t)] {
         let seg = &segments[me];
         let neighbour = if param <= END {
             me.checked_sub(1)
@@ -46,8 +38,8 @@ pub(crate) fn redundant(
             continue;
         }
         if let Some((m, n_is_first)) = find(n, other) {
-            let (qs, qt) = params(m);
-            let n_param = if n_is_first { qs } else { qt };
+            let q = &pairs[m];
+            let n_param = if n_is_first { q.closest.s } else { q.closest.t };
             let n_at_shared = if n < me {
                 n_param >= 1.0 - END
             } else {

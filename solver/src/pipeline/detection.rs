@@ -59,15 +59,15 @@ impl World {
                 closest_points_on_pieces(&a, &b)
             }));
         }
-        let params = |m: usize| match self.curves.get(m) {
-            Some(c) => (c.s, c.t),
-            None => (pairs[m].closest.s, pairs[m].closest.t),
-        };
         self.contacts.clear();
         self.pair_ids.clear();
         for (k, p) in pairs.iter().enumerate() {
+            // Smooth contacts keep every pair: a pair's closest points lie on
+            // a piece's end wherever the distance runs along a line contact,
+            // and each pair's constraint holds its stretch of that line.
             if self.contact.candidates == Candidates::Detected
-                && narrow_phase::redundant(pairs, k, &self.segments, &params)
+                && !smooth
+                && narrow_phase::redundant(pairs, k, &self.segments)
             {
                 continue;
             }

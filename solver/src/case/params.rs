@@ -227,14 +227,15 @@ pub const PARAMETERS: &[Parameter] = &[
         group: Group::Solver,
         unit: "",
         default: "\"segment\"",
-        range: Range::Words(&["smooth", "segment"]),
+        range: Range::Words(&["segment", "smooth"]),
         null: None,
         paper: "\"segment\"",
-        doc: "Which centre lines contacts are computed between: \"smooth\" (the C1 Catmull-Rom curves through the \
-              nodes: gap, normal and the forces' weights on the nodes vary smoothly as one rod slides along another, \
-              so force curves carry no sawtooth of one edge's period) or \"segment\" (the paper's: the straight \
-              segments between the nodes, whose kinks and sag make a sliding contact ride a washboard; \
-              docs/FIDELITY.md).",
+        doc: "Which centre lines contacts are computed between: \"segment\" (the paper's: the straight segments \
+              between the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth of one \
+              edge's period in force curves) or \"smooth\" (the C1 Catmull-Rom curves through the nodes: gap, \
+              normal and the forces' weights on the nodes vary smoothly as one rod slides along another; n = 3's \
+              sawtooth falls from 8.1 % to 3.8 % of F bar, its inversion to 129.6, at three times the cost: \
+              docs/FIDELITY.md, \"Contact geometry\").",
         value: UNCHECKED,
     },
     Parameter {

@@ -4,7 +4,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector3;
 use solver::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
-use solver::contact::gauss_seidel::{ContactPoint, GaussSeidel, GaussSeidelOptions};
+use solver::contact::gauss_seidel::GaussSeidel;
+use solver::contact::{ContactPoint, GaussSeidelOptions};
 use std::f64::consts::TAU;
 use std::hint::black_box;
 
@@ -71,9 +72,11 @@ fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
     let contacts = (0..m)
         .map(|c| {
             let s = 0.5 + 0.1 * (0.3 * c as f64).sin();
+            let nodes = [c, c + 1, m + 1 + c, m + 2 + c];
             ContactPoint {
-                nodes: [c, c + 1, m + 1 + c, m + 2 + c],
-                weights: [1.0 - s, s, s - 1.0, -s],
+                nodes: [nodes, nodes].concat().try_into().expect("eight nodes"),
+                weights: [1.0 - s, s, s - 1.0, -s, 0.0, 0.0, 0.0, 0.0],
+                width: 4,
                 normal: Vector3::z(),
                 gap: -1e-4,
                 mu: 0.1,

@@ -2,7 +2,7 @@
 //! page's 3D view, ParaView): the centre line with its per-node state and the
 //! loaded contacts with their forces. Taken only at samples, never per step.
 //! ("Frame" is kept for the rods' material and reference frames.)
-use crate::contact::gauss_seidel::ContactPoint;
+use crate::contact::ContactPoint;
 use crate::pipeline::World;
 use crate::rod::Rod;
 use nalgebra::Vector3;
@@ -94,10 +94,7 @@ fn ends_repeated(rod: &Rod, f: &dyn Fn(usize) -> f64) -> Vec<f32> {
 impl SnapshotContact {
     /// Contact `c` with force `f` (on A), at node positions `points`.
     fn new(c: &ContactPoint, f: &Vector3<f64>, points: &[Vector3<f64>]) -> Self {
-        let [a0, a1, b0, b1] = c.nodes;
-        let [w0, w1, w2, w3] = c.weights;
-        let a = points[a0] * w0 + points[a1] * w1;
-        let b = -(points[b0] * w2 + points[b1] * w3);
+        let (a, b) = c.points(points);
         let normal = c.normal * f.dot(&c.normal);
         let friction = f - normal;
         let bound = c.mu * normal.norm();
@@ -115,7 +112,7 @@ impl SnapshotContact {
 #[cfg(test)]
 mod tests {
     use super::SnapshotContact;
-    use crate::contact::gauss_seidel::ContactPoint;
+    use crate::contact::ContactPoint;
     use crate::contact::segment::closest_points;
     use nalgebra::Vector3;
 

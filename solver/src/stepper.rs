@@ -11,7 +11,7 @@
 //! Viscous damping F = -gamma M v (v = (q - q_old)/dt) folds into the inertia
 //! coefficient: (1 + gamma dt)/dt^2 M (q - q_old) - M v_old/dt.
 use crate::energies::{self, BANDWIDTH, Energies, Terms};
-use crate::external::{Environment, gravity};
+use crate::external::{self, Environment};
 use crate::linalg::banded::{BandedLdlt, BandedSym};
 use crate::rod::{End, Rod};
 use nalgebra::Vector3;
@@ -530,13 +530,7 @@ impl Stepper {
 
     /// F_ext of eq. (7c): gravity and the extra forces.
     fn set_external(&mut self, rod: &Rod, env: &Environment, extra: Option<&[f64]>) {
-        self.ext.fill(0.0);
-        gravity::add(rod, &env.gravity, &mut self.ext);
-        if let Some(f) = extra {
-            for (e, x) in self.ext.iter_mut().zip(f) {
-                *e += x;
-            }
-        }
+        external::assemble(rod, env, extra, &mut self.ext);
     }
 
     /// Fills the residual r = grad Phi for every DOF (at a fixed DOF it is the

@@ -9,7 +9,7 @@ mod partial;
 mod scales;
 mod table;
 
-pub use crate::contact::{Candidates, ContactSolve, FrictionLaw};
+pub use crate::contact::{Candidates, ContactSolve, FrictionLaw, Geometry};
 use crate::knot::{Knot, KnotSpec, StartShape};
 use crate::words::display_as_word;
 pub use loading::{Direction, Ends, Hold, LoadStage, Rotate, Soft, Target, default_program};

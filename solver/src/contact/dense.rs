@@ -17,21 +17,12 @@
 //! over a full turn read a tension ratio of 4.77 with omega = 1.5 and 6.53 with
 //! plain Gauss-Seidel, against exp(mu phi) = 6.59).
 use super::cone::{natural_map_residual, project_coulomb};
-use super::gauss_seidel::{GaussSeidelOptions, SolveReport, largest_eigenvalue};
+use super::error::ContactError;
+use super::gauss_seidel::largest_eigenvalue;
+use super::options::GaussSeidelOptions;
+use super::problem::DenseProblem;
+use super::report::SolveReport;
 use nalgebra::{Matrix3, Vector3};
-
-/// The contact problem in local frames.
-#[derive(Debug, Clone, Copy)]
-pub struct DenseProblem<'a> {
-    /// Delassus blocks, row-major by blocks: block `(c, d)` at `c * m + d`.
-    pub w: &'a [Matrix3<f64>],
-    /// Free relative velocity of each contact, gap term included.
-    pub free: &'a [Vector3<f64>],
-    /// Friction coefficient of each contact.
-    pub mu: &'a [f64],
-    /// Local sliding direction of each contact (zero: the whole disk).
-    pub sliding: &'a [Vector3<f64>],
-}
 
 /// Solver state with reusable buffers.
 #[derive(Debug, Clone, Default)]
@@ -49,15 +40,16 @@ impl DenseGaussSeidel {
     }
 
     /// Solves the problem from the local warm start `warm` (one force per
-    /// contact, or zero forces).
+    /// contact, or zero forces); a [`ContactError`] for arrays of the wrong
+    /// length, non-finite data or a negative friction coefficient.
     pub fn solve(
         &mut self,
         p: &DenseProblem,
         options: &GaussSeidelOptions,
         warm: Option<&[Vector3<f64>]>,
-    ) -> SolveReport {
+    ) -> Result<SolveReport, ContactError> {
+        validate(p, warm)?;
         let m = p.free.len();
-        debug_assert_eq!(p.w.len(), m * m);
         self.rho.clear();
         self.rho.extend((0..m).map(|c| {
             let b = &p.w[c * m + c];
@@ -108,11 +100,11 @@ impl DenseGaussSeidel {
             converged = max_change2 <= options.tolerance.powi(2) * max_force2
                 || (sweeps % RESIDUAL_EVERY == 0 && self.residual(p) <= options.tolerance);
         }
-        SolveReport {
+        Ok(SolveReport {
             sweeps,
             residual: self.residual(p),
             converged,
-        }
+        })
     }
 
     /// Natural-map residual of the current iterate over the largest force
@@ -135,6 +127,43 @@ impl DenseGaussSeidel {
             max_force = max_force.max(r.norm());
         }
         max_residual / max_force.max(f64::MIN_POSITIVE)
+    }
+}
+
+/// Checks that `p` and `warm` have one entry per contact and finite data.
+fn validate(p: &DenseProblem, warm: Option<&[Vector3<f64>]>) -> Result<(), ContactError> {
+    let m = p.free.len();
+    for (what, expected, got) in [
+        ("w", m * m, p.w.len()),
+        ("mu", m, p.mu.len()),
+        ("sliding", m, p.sliding.len()),
+    ] {
+        if got != expected {
+            return Err(ContactError::ProblemShape { what, expected, got });
+        }
+    }
+    let finite = |x: &Vector3<f64>| x.iter().all(|v| v.is_finite());
+    if let Some(c) = (0..m).find(|&c| {
+        !(finite(&p.free[c])
+            && finite(&p.sliding[c])
+            && p.mu[c] >= 0.0
+            && p.mu[c].is_finite()
+            && p.w[c * m..(c + 1) * m]
+                .iter()
+                .all(|b| b.iter().all(|v| v.is_finite())))
+    }) {
+        return Err(ContactError::InvalidContact(c));
+    }
+    match warm {
+        Some(forces) if forces.len() != m => Err(ContactError::WarmStartLength {
+            expected: m,
+            got: forces.len(),
+        }),
+        Some(forces) => forces
+            .iter()
+            .position(|f| !finite(f))
+            .map_or(Ok(()), |c| Err(ContactError::InvalidWarmStart(c))),
+        None => Ok(()),
     }
 }
 
@@ -185,7 +214,9 @@ mod tests {
                 mu: &[mu],
                 sliding: &[Vector3::zeros()],
             };
-            solver.solve(&problem, &GaussSeidelOptions::default(), None);
+            solver
+                .solve(&problem, &GaussSeidelOptions::default(), None)
+                .unwrap();
             let expected = solve_isotropic(&free[0], w, mu);
             assert!((solver.forces()[0] - expected).norm() <= 1e-12 * (1.0 + expected.norm()));
         }
@@ -211,7 +242,7 @@ mod tests {
                 tolerance: 1e-12,
                 ..Default::default()
             };
-            let report = solver.solve(&problem, &options, None);
+            let report = solver.solve(&problem, &options, None).unwrap();
             assert!(report.converged, "{m} contacts: {report:?}");
             let r = solver.forces();
             let f_max = r.iter().fold(0.0f64, |a, x| a.max(x.norm())).max(1e-300);

@@ -13,178 +13,23 @@
 //! local solution is over-relaxed (`GaussSeidelOptions::relaxation`).
 
 use super::cone::{ContactFrame, natural_map_residual, project_coulomb};
-use super::segment::SegmentPair;
+use super::error::ContactError;
+use super::options::GaussSeidelOptions;
+use super::point::{CONTACT_NODES, ContactPoint, SpinDofs};
+use super::problem::MassProblem;
+use super::report::SolveReport;
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
-use thiserror::Error;
-
-/// One contact between two segments.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ContactPoint {
-    /// Global node ids `(a0, a1, b0, b1)`.
-    pub nodes: [usize; 4],
-    /// Signed barycentric weights `(1 - s, s, -(1 - t), -t)`.
-    pub weights: [f64; 4],
-    /// Unit normal `(C_a - C_b) / d`, from B to A.
-    pub normal: Vector3<f64>,
-    /// Gap `d - (r_a + r_b)` of eq. (8), negative when penetrating.
-    pub gap: f64,
-    /// Friction coefficient `mu >= 0`.
-    pub mu: f64,
-    /// Unit tangent `t` of eq. (9) that friction acts along
-    /// ([`super::FrictionLaw::SlidingDirection`]); zero: friction anywhere
-    /// in the tangent disk of radius `mu r_n` ([`super::FrictionLaw::Isotropic`]).
-    pub sliding_direction: Vector3<f64>,
-    /// Rolling: the twist DOFs (global edge ids) of the two segments and
-    /// their levers `L`, so that a twist rate `theta_dot` adds `L theta_dot`
-    /// to the relative velocity of the touching surface points and the
-    /// force `F` puts the torque `L . F` on that twist. `L_a = -r_a t_a x n`,
-    /// `L_b = -r_b t_b x n`; zero levers: friction at the centre lines.
-    pub spin: [(usize, Vector3<f64>); 2],
-}
-
-/// The twist DOFs that contacts may spin ([`ContactPoint::spin`]): inverse
-/// rotational inertia (0: held) and contact-free twist rate of each edge.
-#[derive(Debug, Clone, Copy)]
-pub struct SpinDofs<'a> {
-    pub inv_inertia: &'a [f64],
-    pub free: &'a [f64],
-}
-
-impl ContactPoint {
-    /// Contact from the closest points of segments `[a0, a1]` (A) and
-    /// `[b0, b1]` (B) (see [`super::segment::closest_points`]), with
-    /// `contact_distance = r_a + r_b`; `None` when the centre lines (nearly)
-    /// touch, `d <= MIN_NORMAL_DISTANCE * contact_distance` (or `d = 0`), where
-    /// the normal is undefined.
-    pub fn from_pair(
-        nodes: [usize; 4],
-        closest: &SegmentPair,
-        contact_distance: f64,
-        mu: f64,
-    ) -> Option<Self> {
-        let d = closest.distance;
-        (d > 0.0 && d > MIN_NORMAL_DISTANCE * contact_distance).then(|| Self {
-            nodes,
-            weights: [1.0 - closest.s, closest.s, closest.t - 1.0, -closest.t],
-            normal: (closest.point_a - closest.point_b) / d,
-            gap: d - contact_distance,
-            mu,
-            sliding_direction: Vector3::zeros(),
-            spin: [(0, Vector3::zeros()); 2],
-        })
-    }
-}
-
-/// Relative centre-line distance below which [`ContactPoint::from_pair`] gives
-/// no contact (normal direction lost in rounding).
-pub const MIN_NORMAL_DISTANCE: f64 = 1e-9;
-
-/// Stopping rule, relaxation and gap treatment.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct GaussSeidelOptions {
-    /// Sweep cap.
-    pub max_sweeps: usize,
-    /// Over-relaxation factor `omega` in (0, 2) (projected SOR): contact `c`
-    /// is updated by `r_c <- P(r_c - (omega / w_c) u_c)`, `P` the projection
-    /// of Signorini and Coulomb's laws. `1` is plain Gauss-Seidel, whose local
-    /// solves are exact. A line contact between two strands lying side by
-    /// side has nearly singular modes (forces alternating along the strands,
-    /// which move almost no node) that plain Gauss-Seidel damps only after
-    /// hundreds of sweeps; `omega > 1` reaches the same solution in fewer
-    /// sweeps (BENCHMARKS.md). A fixed point is a solution for every `omega`.
-    pub relaxation: f64,
-    /// Stop when the largest force change over a sweep, or the natural-map
-    /// residual of [`SolveReport::residual`] (checked every 8 sweeps), is at
-    /// most `tolerance` times the largest contact force.
-    pub tolerance: f64,
-    /// `true`: the free normal velocity gets `gap / dt`, so positive gaps may
-    /// close and penetrations are removed within the step. `false`: only
-    /// positive gaps are credited (`max(gap, 0) / dt`) and penetration is not
-    /// pushed out (pure velocity-level Signorini).
-    pub close_gap: bool,
-}
-
-impl Default for GaussSeidelOptions {
-    fn default() -> Self {
-        Self {
-            max_sweeps: 200,
-            relaxation: 1.5,
-            tolerance: 1e-6,
-            close_gap: true,
-        }
-    }
-}
-
-/// Outcome of [`GaussSeidel::solve`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SolveReport {
-    /// Sweeps performed.
-    pub sweeps: usize,
-    /// Final natural-map residual: `max_c || r_c - P_K(r_c - u_hat_c / w_c) ||`
-    /// over the largest `|r_c|` (zero at an exact solution of eqs. 8-9).
-    pub residual: f64,
-    /// Whether a stopping criterion was met before the sweep cap.
-    pub converged: bool,
-}
-
-/// Invalid Gauss-Seidel input.
-#[derive(Debug, Clone, PartialEq, Error)]
-pub enum ContactError {
-    /// `inv_mass` and `v_free` lengths differ.
-    #[error("{inv_mass} inverse masses but {v_free} free velocities")]
-    LengthMismatch {
-        /// `inv_mass.len()`.
-        inv_mass: usize,
-        /// `v_free.len()`.
-        v_free: usize,
-    },
-    /// A contact refers to a node that does not exist.
-    #[error("contact {contact} refers to node {node} of {nodes}")]
-    NodeOutOfRange {
-        /// Offending contact.
-        contact: usize,
-        /// Its node id.
-        node: usize,
-        /// Number of nodes.
-        nodes: usize,
-    },
-    /// A contact has a non-unit normal, a sliding direction that is neither
-    /// zero nor a unit tangent, a negative `mu` or non-finite data.
-    #[error(
-        "contact {0} has a non-unit normal, a sliding direction that is not a unit tangent, a negative friction coefficient or non-finite data"
-    )]
-    InvalidContact(usize),
-    /// A node has a negative or non-finite inverse mass or velocity.
-    #[error("node {0} has an invalid inverse mass or free velocity")]
-    InvalidNode(usize),
-    /// The over-relaxation factor is outside (0, 2).
-    #[error("over-relaxation factor {0} is outside (0, 2)")]
-    InvalidRelaxation(f64),
-    /// The time step is not positive and finite.
-    #[error("time step {0} is not positive and finite")]
-    InvalidTimeStep(f64),
-    /// A warm-start force is not finite.
-    #[error("warm-start force {0} is not finite")]
-    InvalidWarmStart(usize),
-    /// The warm start does not have one force per contact.
-    #[error("warm start has {got} forces for {expected} contacts")]
-    WarmStartLength {
-        /// Number of contacts.
-        expected: usize,
-        /// Number of warm-start forces.
-        got: usize,
-    },
-}
 
 /// One contact's row of the solve, packed so that a sweep reads each
 /// contact's data from one place.
 #[derive(Debug, Clone, Copy)]
 struct Row {
-    nodes: [usize; 4],
-    weights: [f64; 4],
+    nodes: [usize; CONTACT_NODES],
+    weights: [f64; CONTACT_NODES],
     /// Velocity change of each node per unit force, `dt inv_mass_k w_ck`.
-    push: [f64; 4],
+    push: [f64; CONTACT_NODES],
+    /// Nodes used ([`ContactPoint::width`]).
+    width: usize,
     /// Twist DOFs, levers and twist-rate change per unit torque (`dt / I`).
     spin_edges: [usize; 2],
     spin_levers: [Vector3<f64>; 2],
@@ -224,7 +69,7 @@ impl Row {
         let (spin_free, spin_push, spin_block) = spin_terms(contact, &frame, spin, dt);
         let w_n = dt * self_block(contact, inv_mass);
         let w_t = w_n + largest_eigenvalue(spin_block);
-        let mut free = frame.to_local(&(gather(contact, v_free) + spin_free));
+        let mut free = frame.to_local(&(contact.gather(v_free) + spin_free));
         free.x += if close_gap {
             contact.gap
         } else {
@@ -233,7 +78,14 @@ impl Row {
         Self {
             nodes: contact.nodes,
             weights: contact.weights,
-            push: std::array::from_fn(|k| dt * inv_mass[contact.nodes[k]] * contact.weights[k]),
+            push: std::array::from_fn(|k| {
+                if k < contact.width {
+                    dt * inv_mass[contact.nodes[k]] * contact.weights[k]
+                } else {
+                    0.0
+                }
+            }),
+            width: contact.width,
             spin_edges: [contact.spin[0].0, contact.spin[1].0],
             spin_levers: [contact.spin[0].1, contact.spin[1].1],
             spin_push,
@@ -253,10 +105,10 @@ impl Row {
     /// Current local relative velocity `u_c` given the velocity corrections.
     #[inline(always)]
     fn velocity(&self, dv: &[Vector3<f64>], dspin: &[f64]) -> Vector3<f64> {
-        let mut g = self.weights[0] * dv[self.nodes[0]]
-            + self.weights[1] * dv[self.nodes[1]]
-            + self.weights[2] * dv[self.nodes[2]]
-            + self.weights[3] * dv[self.nodes[3]];
+        let mut g = self.weights[0] * dv[self.nodes[0]];
+        for k in 1..self.width {
+            g += self.weights[k] * dv[self.nodes[k]];
+        }
         if self.spin_push != [0.0; 2] {
             g += self.spin_levers[0] * dspin[self.spin_edges[0]]
                 + self.spin_levers[1] * dspin[self.spin_edges[1]];
@@ -268,7 +120,7 @@ impl Row {
     #[inline(always)]
     fn push(&self, dr: &Vector3<f64>, dv: &mut [Vector3<f64>], dspin: &mut [f64]) {
         let f = self.frame.to_world(dr);
-        for k in 0..4 {
+        for k in 0..self.width {
             dv[self.nodes[k]] += self.push[k] * f;
         }
         for k in 0..2 {
@@ -340,7 +192,7 @@ impl GaussSeidel {
         &self.node_forces
     }
 
-    /// Per-edge torques on the twist DOFs of the last [`GaussSeidel::solve_with_spin`].
+    /// Per-edge torques on the twist DOFs of the last [`GaussSeidel::solve_problem`].
     pub fn spin_torques(&self) -> &[f64] {
         &self.spin_torques
     }
@@ -351,8 +203,9 @@ impl GaussSeidel {
         &self.dv
     }
 
-    /// Solves eqs. (8)-(9) for all contacts given the contact-free velocities
-    /// `v_free`, optionally warm-started from world forces (one per contact).
+    /// Solves eqs. (8)-(9) for `contacts` given the contact-free velocities
+    /// `v_free` (friction at the centre lines), optionally warm-started from
+    /// world forces (one per contact).
     pub fn solve(
         &mut self,
         contacts: &[ContactPoint],
@@ -362,22 +215,32 @@ impl GaussSeidel {
         options: &GaussSeidelOptions,
         warm_start: Option<&[Vector3<f64>]>,
     ) -> Result<SolveReport, ContactError> {
-        self.solve_with_spin(contacts, inv_mass, v_free, None, dt, options, warm_start)
+        let problem = MassProblem {
+            contacts,
+            inv_mass,
+            v_free,
+            spin: None,
+            dt,
+        };
+        self.solve_problem(&problem, options, warm_start)
     }
 
-    /// [`GaussSeidel::solve`] with rolling: contacts whose levers are non-zero
-    /// also move the twist DOFs of `spin` ([`ContactPoint::spin`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn solve_with_spin(
+    /// Solves eqs. (8)-(9) for `problem`, optionally warm-started from world
+    /// forces (one per contact); contacts whose levers are non-zero also move
+    /// the twist DOFs of `problem.spin` ([`ContactPoint::spin`]).
+    pub fn solve_problem(
         &mut self,
-        contacts: &[ContactPoint],
-        inv_mass: &[f64],
-        v_free: &[Vector3<f64>],
-        spin: Option<SpinDofs>,
-        dt: f64,
+        problem: &MassProblem,
         options: &GaussSeidelOptions,
         warm_start: Option<&[Vector3<f64>]>,
     ) -> Result<SolveReport, ContactError> {
+        let MassProblem {
+            contacts,
+            inv_mass,
+            v_free,
+            spin,
+            dt,
+        } = *problem;
         validate(contacts, inv_mass, v_free, dt, warm_start)?;
         if !(options.relaxation > 0.0 && options.relaxation < 2.0) {
             return Err(ContactError::InvalidRelaxation(options.relaxation));
@@ -442,7 +305,7 @@ impl GaussSeidel {
         self.spin_torques.resize(edges, 0.0);
         for row in &self.rows {
             let force = row.frame.to_world(&row.r);
-            for (&k, &wk) in row.nodes.iter().zip(&row.weights) {
+            for (&k, &wk) in row.nodes.iter().zip(&row.weights).take(row.width) {
                 self.node_forces[k] += wk * force;
             }
             for k in 0..2 {
@@ -516,16 +379,6 @@ fn spin_terms(
     (spin_free, spin_push, spin_block)
 }
 
-/// `sum_k w_ck x_k` over the contact's nodes.
-#[inline]
-fn gather(contact: &ContactPoint, x: &[Vector3<f64>]) -> Vector3<f64> {
-    contact
-        .nodes
-        .iter()
-        .zip(&contact.weights)
-        .fold(Vector3::zeros(), |acc, (&k, &wk)| acc + wk * x[k])
-}
-
 /// Largest eigenvalue of the symmetric 2x2 matrix with entries `(a, b, c)`
 /// = `[[a, b], [b, c]]`.
 pub(super) fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
@@ -535,11 +388,12 @@ pub(super) fn largest_eigenvalue([a, b, c]: [f64; 3]) -> f64 {
 /// `W_cc / dt = sum_{k, k'} [node_k = node_k'] w_ck w_ck' inv_mass_k`, exact
 /// even when a node appears twice in the contact.
 fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
+    let (nodes, weights) = contact.stencil();
     let mut sum = 0.0;
-    for (a, (&ka, &wa)) in contact.nodes.iter().zip(&contact.weights).enumerate() {
-        let same: f64 = contact.nodes[a..]
+    for (a, (&ka, &wa)) in nodes.iter().zip(weights).enumerate() {
+        let same: f64 = nodes[a..]
             .iter()
-            .zip(&contact.weights[a..])
+            .zip(&weights[a..])
             .filter(|&(&kb, _)| kb == ka)
             .map(|(_, &wb)| wb)
             .sum();
@@ -570,7 +424,10 @@ fn validate(
         return Err(ContactError::InvalidNode(k));
     }
     for (c, contact) in contacts.iter().enumerate() {
-        if let Some(&node) = contact.nodes.iter().find(|&&k| k >= inv_mass.len()) {
+        if !(1..=CONTACT_NODES).contains(&contact.width) {
+            return Err(ContactError::InvalidContact(c));
+        }
+        if let Some(&node) = contact.stencil().0.iter().find(|&&k| k >= inv_mass.len()) {
             return Err(ContactError::NodeOutOfRange {
                 contact: c,
                 node,
@@ -578,7 +435,8 @@ fn validate(
             });
         }
         let finite = contact
-            .weights
+            .stencil()
+            .1
             .iter()
             .chain(contact.normal.iter())
             .chain(contact.sliding_direction.iter())
@@ -640,7 +498,7 @@ mod tests {
             .max(1e-300);
         for (c, contact) in contacts.iter().enumerate() {
             let r = gs.rows[c].r;
-            let u = gs.rows[c].free + gs.rows[c].frame.to_local(&gather(contact, &gs.dv));
+            let u = gs.rows[c].free + gs.rows[c].frame.to_local(&contact.gather(&gs.dv));
             let (rt, ut) = (tangential(&r), tangential(&u));
             let mu = contact.mu;
             assert!(r.x >= 0.0 && u.x >= -tol * u_max, "contact {c}: r {r:?} u {u:?}");
@@ -683,7 +541,7 @@ mod tests {
             Vector3::new(0.0, 1.0, 0.0),
         ];
         let c = contact(&x, [0, 1, 2, 3], 0.4, 0.2);
-        assert_eq!(c.weights, [0.75, 0.25, -0.5, -0.5]);
+        assert_eq!(c.stencil().1, [0.75, 0.25, -0.5, -0.5]);
         assert!((c.normal - Vector3::z()).norm() < 1e-15 && (c.gap - 0.1).abs() < 1e-15);
         assert!(c.weights.iter().sum::<f64>().abs() < 1e-15);
         let touching = closest_points(&x[0], &x[1], &x[0], &x[3]);
@@ -1056,7 +914,7 @@ mod tests {
             ContactError::InvalidNode(1)
         );
         let far = ContactPoint {
-            nodes: [0, 1, 2, 9],
+            nodes: [0, 1, 2, 9, 0, 1, 2, 9],
             ..c
         };
         assert_eq!(
@@ -1098,8 +956,9 @@ mod tests {
         let (dt, mu) = (0.1, 0.3);
         let t = Vector3::x();
         let c = ContactPoint {
-            nodes: [0, 0, 1, 1],
-            weights: [1.0, 0.0, -1.0, 0.0],
+            nodes: [0, 0, 1, 1, 0, 0, 1, 1],
+            weights: [1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            width: 4,
             normal: Vector3::z(),
             gap: 0.0,
             mu,
@@ -1145,8 +1004,9 @@ mod tests {
     fn repeated_node_self_block() {
         // Contact sharing node 1 between A and B (degenerate, but W_cc stays exact).
         let c = ContactPoint {
-            nodes: [0, 1, 1, 2],
-            weights: [0.5, 0.5, -0.3, -0.7],
+            nodes: [0, 1, 1, 2, 0, 1, 1, 2],
+            weights: [0.5, 0.5, -0.3, -0.7, 0.0, 0.0, 0.0, 0.0],
+            width: 4,
             normal: Vector3::z(),
             gap: 0.0,
             mu: 0.0,

@@ -1,8 +1,6 @@
 //! The narrow phase's choices (paper Sec. 3.2): which candidate pairs from
 //! the broad phase become contacts, and eq. (9)'s sliding direction.
 use super::broad_phase::{CandidatePair, Segment};
-use super::segment::SegmentPair;
-use crate::rod::Rod;
 use nalgebra::Vector3;
 
 /// Whether candidate `k` duplicates a neighbour: its closest point lies on a
@@ -55,21 +53,10 @@ pub(crate) fn redundant(pairs: &[CandidatePair], k: usize, segments: &[Segment])
     false
 }
 
-/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of the relative
-/// velocity of the closest points (A relative to B) at the start of the
-/// step; zero when there is none.
-pub(crate) fn sliding_direction(
-    rods: &[Rod],
-    sa: &Segment,
-    sb: &Segment,
-    closest: &SegmentPair,
-    normal: &Vector3<f64>,
-) -> Vector3<f64> {
-    let (ra, rb) = (&rods[sa.body], &rods[sb.body]);
-    let (s, t) = (closest.s, closest.t);
-    let u = (1.0 - s) * ra.node_velocity(sa.index) + s * ra.node_velocity(sa.index + 1)
-        - (1.0 - t) * rb.node_velocity(sb.index)
-        - t * rb.node_velocity(sb.index + 1);
+/// Eq. (9)'s `t = u_t / |u_t|`: the tangential part of `u`, the relative
+/// velocity of the contact points (A relative to B) at the start of the
+/// step, against the contact's unit `normal`; zero when there is none.
+pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vector3<f64> {
     let ut = u - normal * u.dot(normal);
     let norm = ut.norm();
     if norm > 0.0 { ut / norm } else { Vector3::zeros() }

@@ -17,9 +17,8 @@
 //! holds for the motion the step actually takes.
 use super::{World, WorldError, WorldStepReport};
 use crate::contact::cone::ContactFrame;
-use crate::contact::dense::{DenseGaussSeidel, DenseProblem};
-use crate::contact::gauss_seidel::ContactPoint;
-use crate::contact::{Candidates, ContactSolve};
+use crate::contact::dense::DenseGaussSeidel;
+use crate::contact::{Candidates, ContactPoint, ContactSolve, DenseProblem};
 use crate::rod::{Rod, RodState, node_dof, theta_dof};
 use crate::stepper::StepError;
 use nalgebra::{Matrix3, Vector3};
@@ -82,7 +81,8 @@ impl Numbering {
     #[inline]
     fn gather(&self, c: &ContactPoint, x: &[f64]) -> Vector3<f64> {
         let mut g = Vector3::zeros();
-        for (&k, &wk) in c.nodes.iter().zip(&c.weights) {
+        let (nodes, weights) = c.stencil();
+        for (&k, &wk) in nodes.iter().zip(weights) {
             let d = self.node_dofs[k];
             g += wk * Vector3::new(x[d], x[d + 1], x[d + 2]);
         }
@@ -98,7 +98,8 @@ impl Numbering {
     /// the generalised vector `x`.
     #[inline]
     fn scatter(&self, c: &ContactPoint, f: &Vector3<f64>, x: &mut [f64]) {
-        for (&k, &wk) in c.nodes.iter().zip(&c.weights) {
+        let (nodes, weights) = c.stencil();
+        for (&k, &wk) in nodes.iter().zip(weights) {
             let d = self.node_dofs[k];
             for a in 0..3 {
                 x[d + a] += wk * f[a];
@@ -194,13 +195,18 @@ impl World {
 
     /// Step 3 of [`World::step`] for [`ContactSolve::Implicit`], after
     /// [`World::predict`]: adds the contact forces to each body's `force`.
-    /// `false` when a rod's Newton matrix for this step is not at hand (its
-    /// contact-free step needed substeps); the explicit solve then stands in.
-    pub(super) fn solve_contacts_implicit(&mut self, dt: f64, report: &mut WorldStepReport) -> bool {
+    /// `Ok(false)` when a rod's Newton matrix for this step is not at hand
+    /// (its contact-free step needed substeps); the explicit solve then
+    /// stands in.
+    pub(super) fn solve_contacts_implicit(
+        &mut self,
+        dt: f64,
+        report: &mut WorldStepReport,
+    ) -> Result<bool, WorldError> {
         debug_assert_eq!(self.contact.solve, ContactSolve::Implicit);
         if !self.compliance_columns(dt) {
             self.counters.explicit_fallbacks += 1;
-            return false;
+            return Ok(false);
         }
         self.delassus(dt);
         let b = &mut self.implicit;
@@ -218,7 +224,7 @@ impl World {
             mu: &b.mu,
             sliding: &b.sliding,
         };
-        let sol = b.solver.solve(&problem, &self.contact.solver, Some(&b.warm));
+        let sol = b.solver.solve(&problem, &self.contact.solver, Some(&b.warm))?;
         report.contact_sweeps = sol.sweeps;
         report.contact_residual = sol.residual;
         report.active_contacts = b.solver.forces().iter().filter(|r| r.x > 0.0).count();
@@ -246,7 +252,7 @@ impl World {
             }
         }
         self.history.push(&self.pair_ids, &self.forces, dt);
-        true
+        Ok(true)
     }
 
     /// The contacts' frames into `implicit.frames` and `A^-1 H` into

@@ -16,64 +16,25 @@
 //! With [`ContactSolve::Implicit`] steps 2-3 see the implicit step instead
 //! ([`implicit`]): the free velocities come from a contact-free implicit step
 //! and the Delassus operator from its Newton matrix.
+mod detection;
+mod explicit;
 mod implicit;
+mod warm_start;
+
+pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
-use crate::contact::gauss_seidel::{ContactError, ContactPoint, GaussSeidel, GaussSeidelOptions, SpinDofs};
-use crate::contact::segment::closest_points;
-use crate::contact::{Candidates, ContactSolve, FrictionLaw, narrow_phase};
+use crate::contact::curve::CurvePair;
+use crate::contact::gauss_seidel::GaussSeidel;
+use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve};
 use crate::counters::Counters;
-use crate::energies::{self, Energies, Terms};
-use crate::external::{Environment, gravity};
-use crate::rod::{Rod, RodState, node_dof, theta_dof};
+use crate::energies::Energies;
+use crate::external::Environment;
+use crate::rod::{Rod, RodState};
 use crate::stepper::{NewtonOptions, StepError, StepReport, Stepper};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
-
-/// Contact model parameters.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ContactOptions {
-    /// Whether contact is detected and resolved at all.
-    pub enabled: bool,
-    /// Coulomb friction coefficient mu, eq. (9).
-    pub friction: f64,
-    /// Which tangential forces the friction bound admits (eqs. 9-10).
-    pub friction_law: FrictionLaw,
-    /// Friction acts at the rods' surfaces: a contact's relative velocity
-    /// includes the touching surfaces' spin about each rod's axis (twist
-    /// rates times the radius), and friction puts a torque on each twist, so
-    /// a rod can roll on another. `false`: friction at the centre lines.
-    pub rolling: bool,
-    /// Detection margin added to r_a + r_b, as a fraction of the largest radius;
-    /// the margin also grows with the fastest node's travel over the step.
-    pub margin: f64,
-    /// Fraction of a penetration removed within one step (1 = the paper's
-    /// "gap closed in one step"; smaller values separate interpenetrating rods
-    /// more gently).
-    pub penetration_recovery: f64,
-    /// The Gauss-Seidel stopping rule.
-    pub solver: GaussSeidelOptions,
-    /// Which free velocities and Delassus operator the contact solve uses.
-    pub solve: ContactSolve,
-    /// Which segment pairs get a contact force.
-    pub candidates: Candidates,
-}
-
-impl Default for ContactOptions {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            friction: 0.1,
-            friction_law: FrictionLaw::default(),
-            rolling: true,
-            margin: 0.25,
-            penetration_recovery: 1.0,
-            solver: GaussSeidelOptions::default(),
-            solve: ContactSolve::default(),
-            candidates: Candidates::default(),
-        }
-    }
-}
+use warm_start::ForceHistory;
 
 /// What one world step did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -122,6 +83,8 @@ pub struct World {
     broad: BroadPhase,
     gauss_seidel: GaussSeidel,
     segments: Vec<Segment>,
+    /// The smooth centre lines' closest points of each candidate pair.
+    curves: Vec<CurvePair>,
     gaps: Vec<usize>,
     contacts: Vec<ContactPoint>,
     pair_ids: Vec<(usize, usize)>,
@@ -158,85 +121,6 @@ struct Saved {
     rods: Vec<RodState>,
     history: ForceHistory,
 }
-
-/// The contact forces of the last two solves, by segment pair, for the
-/// next solve's warm start.
-#[derive(Default)]
-struct ForceHistory {
-    /// Pair ids (sorted) and forces of the last solve, and its step.
-    ids: Vec<(usize, usize)>,
-    forces: Vec<Vector3<f64>>,
-    dt: f64,
-    /// The same for the solve before it.
-    prev_ids: Vec<(usize, usize)>,
-    prev_forces: Vec<Vector3<f64>>,
-    prev_dt: f64,
-}
-
-impl Clone for ForceHistory {
-    fn clone(&self) -> Self {
-        let mut copy = Self::default();
-        copy.clone_from(self);
-        copy
-    }
-
-    /// Reuses this history's buffers (a checkpoint every step allocates nothing).
-    fn clone_from(&mut self, source: &Self) {
-        self.ids.clone_from(&source.ids);
-        self.forces.clone_from(&source.forces);
-        self.dt = source.dt;
-        self.prev_ids.clone_from(&source.prev_ids);
-        self.prev_forces.clone_from(&source.prev_forces);
-        self.prev_dt = source.prev_dt;
-    }
-}
-
-impl ForceHistory {
-    /// The warm start of each of `pair_ids` (sorted) for a step of `dt`:
-    /// where the pair was in contact at the last two solves of this step
-    /// size, the force extrapolated linearly from them (the pull changes
-    /// the forces smoothly, so this is closer to the solution than the last
-    /// force); where only at the last, that force; else zero.
-    fn warm_start(&self, pair_ids: &[(usize, usize)], dt: f64, out: &mut Vec<Vector3<f64>>) {
-        out.clear();
-        let extrapolate = self.dt == dt && self.prev_dt == dt;
-        let (mut k, mut m) = (0, 0);
-        for id in pair_ids {
-            while k < self.ids.len() && self.ids[k] < *id {
-                k += 1;
-            }
-            while m < self.prev_ids.len() && self.prev_ids[m] < *id {
-                m += 1;
-            }
-            let last = (k < self.ids.len() && self.ids[k] == *id).then(|| self.forces[k]);
-            let before = (m < self.prev_ids.len() && self.prev_ids[m] == *id).then(|| self.prev_forces[m]);
-            out.push(match (last, before) {
-                (Some(f1), Some(f0)) if extrapolate => 2.0 * f1 - f0,
-                (Some(f1), _) => f1,
-                _ => Vector3::zeros(),
-            });
-        }
-    }
-
-    /// Records a solve's forces: the last solve becomes the one before.
-    fn push(&mut self, pair_ids: &[(usize, usize)], forces: &[Vector3<f64>], dt: f64) {
-        std::mem::swap(&mut self.ids, &mut self.prev_ids);
-        std::mem::swap(&mut self.forces, &mut self.prev_forces);
-        self.prev_dt = self.dt;
-        self.ids.clear();
-        self.ids.extend_from_slice(pair_ids);
-        self.forces.clear();
-        self.forces.extend_from_slice(forces);
-        self.dt = dt;
-    }
-}
-
-/// The broad phase's skin as a fraction of the largest radius: candidate
-/// pairs are searched within `margin + SKIN r` and reused until a node has
-/// moved half that far (`BroadPhase::find_pairs_reusing`; the contacts are
-/// the same as a fresh search's). Of the skins from 0.25 r to 2 r, 0.25 r
-/// cut a mu = 0.5 case's detection time most.
-const SKIN: f64 = 0.25;
 
 impl World {
     /// A world of `rods` under `env`, each stepped with `newton`.
@@ -279,6 +163,7 @@ impl World {
             broad: BroadPhase::new(),
             gauss_seidel: GaussSeidel::new(),
             segments: Vec::new(),
+            curves: Vec::new(),
             gaps,
             contacts: Vec::new(),
             pair_ids: Vec::new(),
@@ -370,13 +255,10 @@ impl World {
                 Counters::time(&mut solve, || self.predict(dt))?;
             }
             report.contacts = self.contacts.len();
-            let implicit = self.contact.solve == ContactSolve::Implicit;
-            let solved = if self.contacts.is_empty()
-                || implicit && Counters::time(&mut solve, || self.solve_contacts_implicit(dt, &mut report))
-            {
+            let solved = if self.contacts.is_empty() {
                 Ok(())
             } else {
-                Counters::time(&mut solve, || self.solve_contacts(dt, &mut report))
+                Counters::time(&mut solve, || self.solve(dt, &mut report))
             };
             self.counters.contact_solve = solve;
             solved?;
@@ -389,160 +271,14 @@ impl World {
         Ok(report)
     }
 
-    fn detect(&mut self, dt: f64) -> Result<(), WorldError> {
-        self.segments.clear();
-        self.implicit.dropped.clear();
-        let mut fastest: f64 = 0.0;
-        let mut largest_radius: f64 = 0.0;
-        for (b, rod) in self.rods.iter().enumerate() {
-            largest_radius = largest_radius.max(rod.section.radius);
-            for i in 0..rod.nodes() {
-                fastest = fastest.max(rod.node_velocity(i).norm());
-            }
-            for e in 0..rod.edges() {
-                self.segments.push(Segment {
-                    a: rod.node(e),
-                    b: rod.node(e + 1),
-                    radius: rod.section.radius,
-                    body: b,
-                    index: e,
-                });
-            }
+    /// Steps 2-3: the contact forces into each rod's `force`, by the
+    /// implicit solve where it is chosen and its Newton matrices are at hand,
+    /// else by the explicit one.
+    fn solve(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
+        if self.contact.solve == ContactSolve::Implicit && self.solve_contacts_implicit(dt, report)? {
+            return Ok(());
         }
-        let margin = self.contact.margin * largest_radius + 2.0 * fastest * dt;
-        let pairs = self
-            .broad
-            .find_pairs_reusing(&self.segments, &self.gaps, margin, SKIN * largest_radius)
-            .map_err(|e| WorldError::Detection(e.to_string()))?;
-        self.contacts.clear();
-        self.pair_ids.clear();
-        for (k, p) in pairs.iter().enumerate() {
-            if self.contact.candidates == Candidates::Detected
-                && narrow_phase::redundant(pairs, k, &self.segments)
-            {
-                continue;
-            }
-            let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
-            let (oa, ob) = (self.bodies[sa.body].first_node, self.bodies[sb.body].first_node);
-            let nodes = [oa + sa.index, oa + sa.index + 1, ob + sb.index, ob + sb.index + 1];
-            if let Some(mut c) =
-                ContactPoint::from_pair(nodes, &p.closest, sa.radius + sb.radius, self.contact.friction)
-            {
-                if c.gap < 0.0 {
-                    c.gap *= self.contact.penetration_recovery;
-                }
-                if self.contact.rolling {
-                    let (ea, eb) = (
-                        self.bodies[sa.body].first_edge + sa.index,
-                        self.bodies[sb.body].first_edge + sb.index,
-                    );
-                    let lever = |seg: &Segment| {
-                        let t = (seg.b - seg.a).normalize();
-                        -seg.radius * t.cross(&c.normal)
-                    };
-                    c.spin = [(ea, lever(sa)), (eb, lever(sb))];
-                }
-                if self.contact.friction_law == FrictionLaw::SlidingDirection {
-                    c.sliding_direction =
-                        narrow_phase::sliding_direction(&self.rods, sa, sb, &p.closest, &c.normal);
-                }
-                self.contacts.push(c);
-                self.pair_ids.push((p.i, p.j));
-            }
-        }
-        Ok(())
-    }
-
-    /// The explicit contact solve (steps 2-3): contact forces into each
-    /// rod's `force`; a [`ContactError`] ends the step before the rods move.
-    fn solve_contacts(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
-        for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
-            let grad: &[f64] = match body.stepper.elastic_gradient(rod) {
-                Some(g) => g,
-                None => {
-                    energies::evaluate(rod, Terms::ALL, &mut body.grad, None);
-                    &body.grad
-                }
-            };
-            let force = &mut body.force;
-            force.copy_from_slice(&body.load);
-            gravity::add(rod, &self.env.gravity, force);
-            // A free DOF's contact-free velocity, v + dt M^-1 (F - grad E),
-            // damped, and its effective inverse mass (the same rule as the stepper's).
-            let damp = 1.0 / self.env.damping_factor(dt);
-            let free = |d: usize| {
-                let m = rod.mass[d];
-                (damp * (rod.velocity[d] + dt * (force[d] - grad[d]) / m), damp / m)
-            };
-            let off = body.first_node;
-            for i in 0..rod.nodes() {
-                let d = node_dof(i);
-                let (v, inv_mass) = if rod.fixed[d] || rod.fixed[d + 1] || rod.fixed[d + 2] {
-                    let p = &rod.prescribed_velocity;
-                    (Vector3::new(p[d], p[d + 1], p[d + 2]), 0.0)
-                } else {
-                    let (x, y, z) = (free(d), free(d + 1), free(d + 2));
-                    (Vector3::new(x.0, y.0, z.0), x.1)
-                };
-                self.v_free[off + i] = v;
-                self.inv_mass[off + i] = inv_mass;
-            }
-            if self.contact.rolling {
-                for e in 0..rod.edges() {
-                    let d = theta_dof(e);
-                    let k = body.first_edge + e;
-                    (self.spin_free[k], self.spin_inv_inertia[k]) = if rod.fixed[d] {
-                        (rod.prescribed_velocity[d], 0.0)
-                    } else {
-                        free(d)
-                    };
-                }
-            }
-            force.copy_from_slice(&body.load);
-        }
-        // Warm start from the last steps' forces on the same segment pairs.
-        self.history.warm_start(&self.pair_ids, dt, &mut self.warm);
-        let spin = self.contact.rolling.then_some(SpinDofs {
-            inv_inertia: &self.spin_inv_inertia,
-            free: &self.spin_free,
-        });
-        let sol = self.gauss_seidel.solve_with_spin(
-            &self.contacts,
-            &self.inv_mass,
-            &self.v_free,
-            spin,
-            dt,
-            &self.contact.solver,
-            Some(&self.warm),
-        )?;
-        report.contact_sweeps = sol.sweeps;
-        report.contact_residual = sol.residual;
-        report.active_contacts = self
-            .gauss_seidel
-            .contact_forces()
-            .iter()
-            .zip(&self.contacts)
-            .filter(|(f, c)| f.dot(&c.normal) > 0.0)
-            .count();
-        let node_forces = self.gauss_seidel.node_forces();
-        for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
-            let off = body.first_node;
-            for i in 0..rod.nodes() {
-                let d = node_dof(i);
-                for (f, n) in body.force[d..d + 3].iter_mut().zip(node_forces[off + i].iter()) {
-                    *f += n;
-                }
-            }
-            if self.contact.rolling {
-                let torques = self.gauss_seidel.spin_torques();
-                for e in 0..rod.edges() {
-                    body.force[theta_dof(e)] += torques[body.first_edge + e];
-                }
-            }
-        }
-        self.forces.extend_from_slice(self.gauss_seidel.contact_forces());
-        self.history.push(&self.pair_ids, &self.forces, dt);
-        Ok(())
+        self.solve_contacts(dt, report)
     }
 
     fn step_rods(&mut self, dt: f64, report: &mut WorldStepReport) -> Result<(), WorldError> {
@@ -561,25 +297,5 @@ impl World {
             report.energies.twisting += r.energies.twisting;
         }
         Ok(())
-    }
-
-    /// Largest penetration over the detected pairs at the current positions.
-    fn max_penetration(&self) -> f64 {
-        let pairs = self.pair_ids.iter().chain(&self.implicit.dropped);
-        pairs.fold(0.0, |worst: f64, &(i, j)| worst.max(self.penetration(i, j)))
-    }
-
-    /// How far segments `i` and `j` overlap at the current positions:
-    /// `r_a + r_b` minus their distance (negative when apart).
-    fn penetration(&self, i: usize, j: usize) -> f64 {
-        let (sa, sb) = (&self.segments[i], &self.segments[j]);
-        let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
-        let cp = closest_points(
-            &ra.node(sa.index),
-            &ra.node(sa.index + 1),
-            &rb.node(sb.index),
-            &rb.node(sb.index + 1),
-        );
-        sa.radius + sb.radius - cp.distance
     }
 }

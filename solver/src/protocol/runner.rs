@@ -5,7 +5,7 @@ use super::adaptive::{Outcome, Phase, RELAX_DAMPING};
 use super::report::{CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
-use crate::contact::gauss_seidel::GaussSeidelOptions;
+use crate::contact::GaussSeidelOptions;
 use crate::energies;
 use crate::external::{Environment, sliding};
 use crate::knot::StartShape;
@@ -110,6 +110,7 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         rolling: params.rolling,
         solve: params.contact_solve,
         candidates: params.contact_candidates,
+        geometry: params.contact_geometry,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
             ..defaults.solver

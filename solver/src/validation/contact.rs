@@ -1,7 +1,7 @@
 //! Contact cases (paper Sec. 3.2): crossing rods pressed together, a short rod
 //! on an inclined fixed rod (stick/slide), the capstan equation, and energy
 //! behaviour of frictionless bounces and of initially interpenetrating rods.
-use crate::contact::{ContactSolve, FrictionLaw};
+use crate::contact::{ContactSolve, FrictionLaw, Geometry};
 use crate::external::Environment;
 use crate::material::Material;
 use crate::pipeline::{ContactOptions, World, WorldError};
@@ -310,6 +310,89 @@ pub fn capstan(mu: f64, phi: f64, law: FrictionLaw, solve: ContactSolve) -> Resu
         }
     }
     Ok((sum / count as f64 / load, (mu * phi).exp()))
+}
+
+/// The washboard: a rope (h = 1 mm, E = 10 MPa, edges 2.08 h as the knot's
+/// default mesh) draped over a fixed straight rod of the same radius, turned
+/// by `phi` about it, loaded by a constant tension T = 0.1 N at one end and
+/// pulled along its other tail at 1 cm/s, frictionless, contacts computed
+/// between the centre lines of `geometry`. Without friction the pulling force
+/// is T whatever the rope's position (the fixed rod pushes along its
+/// normals, which do no work on sliding), and the rod carries
+/// N = 2 T sin(phi / 2). Returns the pulling force's largest deviation from
+/// its running mean over one edge of travel (the fluctuation at the edges'
+/// scale) over N, and the mean pulling force over T.
+pub fn washboard(phi: f64, geometry: Geometry) -> Result<(f64, f64), WorldError> {
+    let h = 1e-3;
+    let radius = 2.0 * h * (1.0 + 1e-3);
+    let edge = 2.08 * h;
+    let tail_edges = 40;
+    let load = 0.1;
+    let at = |psi: f64| Vector3::new(radius * psi.cos(), 0.0, radius * psi.sin());
+    let tangent = |psi: f64| Vector3::new(-psi.sin(), 0.0, psi.cos());
+    // Wrap from psi = pi/2 + phi/2 (the loaded tail's tangent point) down to pi/2 - phi/2.
+    let (start, end) = (0.5 * (PI + phi), 0.5 * (PI - phi));
+    let wrap_edges = ((radius * phi) / edge).ceil() as usize;
+    let mut nodes = Vec::new();
+    for i in (1..=tail_edges).rev() {
+        nodes.push(at(start) + tangent(start) * (i as f64 * edge));
+    }
+    for i in 0..=wrap_edges {
+        nodes.push(at(start + (end - start) * i as f64 / wrap_edges as f64));
+    }
+    for i in 1..=tail_edges {
+        nodes.push(at(end) - tangent(end) * (i as f64 * edge));
+    }
+    let material = Material {
+        youngs_modulus: 1e7,
+        ..Material::default()
+    };
+    let mut rope = Rod::new(&nodes, h, material).expect("valid rope");
+    rope.clamp(End::Finish);
+    let pull_dir = -tangent(end);
+    let load_dir = tangent(start);
+    let bar = fixed_rod(Vector3::new(0.0, -0.02, 0.0), Vector3::new(0.0, 0.02, 0.0), 11, h);
+    let env = Environment {
+        gravity: Vector3::zeros(),
+        damping: 50.0,
+    };
+    let contact = ContactOptions {
+        friction: 0.0,
+        geometry,
+        ..ContactOptions::default()
+    };
+    let mut world = World::new(vec![rope, bar], env, contact, NewtonOptions::default());
+    let (dt, speed) = (2e-4, 0.01);
+    // The load is ramped in and settles with the clamp still; then the clamp
+    // pulls over eight edges, the first two left to the start's transient.
+    let (ramp, settle) = (250, 1500);
+    let pull_steps = (8.0 * edge / speed / dt).round() as usize;
+    let skip = (2.0 * edge / speed / dt).round() as usize;
+    let mut forces = Vec::with_capacity(pull_steps);
+    for step in 0..ramp + settle + pull_steps {
+        let scale = ((step + 1) as f64 / ramp as f64).min(1.0);
+        for c in 0..3 {
+            world.load_mut(0)[node_dof(0) + c] = scale * load * load_dir[c];
+        }
+        if step == ramp + settle {
+            world.rods[0].move_clamp(End::Finish, pull_dir * speed);
+        }
+        world.step(dt)?;
+        if step >= ramp + settle + skip {
+            let (f, _) = world.stepper(0).clamp_reaction(&world.rods[0], End::Finish);
+            forces.push(f.dot(&pull_dir));
+        }
+    }
+    let window = (edge / speed / dt).round() as usize;
+    let mean = forces.iter().sum::<f64>() / forces.len() as f64;
+    let mut largest: f64 = 0.0;
+    for k in window / 2..forces.len() - window / 2 {
+        let around = &forces[k - window / 2..=k + window / 2];
+        let running = around.iter().sum::<f64>() / around.len() as f64;
+        largest = largest.max((forces[k] - running).abs());
+    }
+    let normal = 2.0 * load * (0.5 * phi).sin();
+    Ok((largest / normal, mean / load))
 }
 
 /// A sticking contact under a stiff load path: a rod (10 cm, 20 nodes,

@@ -1,0 +1,181 @@
+//! Step 1 of [`World::step`]: the contacts at the start of the step (broad
+//! phase, closest points, the narrow phase's choices), and the
+//! penetrations the step's end leaves.
+use super::{World, WorldError};
+use crate::contact::broad_phase::Segment;
+use crate::contact::curve::{Piece, closest_points_on_pieces};
+use crate::contact::segment::closest_points;
+use crate::contact::{Candidates, ContactPoint, FrictionLaw, Geometry, narrow_phase};
+use crate::rod::Rod;
+use nalgebra::Vector3;
+
+/// The broad phase's skin as a fraction of the largest radius: candidate
+/// pairs are searched within `margin + SKIN r` and reused until a node has
+/// moved half that far (`BroadPhase::find_pairs_reusing`; the contacts are
+/// the same as a fresh search's). Of the skins from 0.25 r to 2 r, 0.25 r
+/// cut a mu = 0.5 case's detection time most.
+pub(super) const SKIN: f64 = 0.25;
+
+impl World {
+    /// The contacts of the start-of-step state into `contacts` (and their
+    /// segment pairs into `pair_ids`).
+    pub(super) fn detect(&mut self, dt: f64) -> Result<(), WorldError> {
+        self.segments.clear();
+        self.implicit.dropped.clear();
+        let mut fastest: f64 = 0.0;
+        let mut largest_radius: f64 = 0.0;
+        for (b, rod) in self.rods.iter().enumerate() {
+            largest_radius = largest_radius.max(rod.section.radius);
+            for i in 0..rod.nodes() {
+                fastest = fastest.max(rod.node_velocity(i).norm());
+            }
+            for e in 0..rod.edges() {
+                self.segments.push(Segment {
+                    a: rod.node(e),
+                    b: rod.node(e + 1),
+                    radius: rod.section.radius,
+                    body: b,
+                    index: e,
+                });
+            }
+        }
+        let margin = self.contact.margin * largest_radius + 2.0 * fastest * dt;
+        let smooth = self.contact.geometry == Geometry::Smooth;
+        // A smooth centre line strays from its chords by at most its pieces'
+        // bound on both rods: the chords' search reaches that much further.
+        let reach = if smooth {
+            2.0 * largest_chord_deviation(&self.rods)
+        } else {
+            0.0
+        };
+        let pairs = self
+            .broad
+            .find_pairs_reusing(&self.segments, &self.gaps, margin + reach, SKIN * largest_radius)
+            .map_err(|e| WorldError::Detection(e.to_string()))?;
+        self.curves.clear();
+        if smooth {
+            self.curves.extend(pairs.iter().map(|p| {
+                let (a, b) = pieces(&self.rods, &self.segments[p.i], &self.segments[p.j]);
+                closest_points_on_pieces(&a, &b)
+            }));
+        }
+        self.contacts.clear();
+        self.pair_ids.clear();
+        for (k, p) in pairs.iter().enumerate() {
+            // Smooth contacts keep every pair: a pair's closest points lie on
+            // a piece's end wherever the distance runs along a line contact,
+            // and each pair's constraint holds its stretch of that line.
+            if self.contact.candidates == Candidates::Detected
+                && !smooth
+                && narrow_phase::redundant(pairs, k, &self.segments)
+            {
+                continue;
+            }
+            let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
+            let (oa, ob) = (self.bodies[sa.body].first_node, self.bodies[sb.body].first_node);
+            let contact_distance = sa.radius + sb.radius;
+            let mu = self.contact.friction;
+            // The contact and each rod's unit tangent at it.
+            let found = if smooth {
+                let curve = &self.curves[k];
+                if curve.distance >= contact_distance + margin {
+                    continue;
+                }
+                let (a, b) = pieces(&self.rods, sa, sb);
+                let stencil =
+                    |piece: &Piece, u: f64, first: usize| (piece.nodes.map(|i| first + i), piece.weights(u));
+                ContactPoint::from_curves(
+                    stencil(&a, curve.s, oa),
+                    stencil(&b, curve.t, ob),
+                    curve,
+                    contact_distance,
+                    mu,
+                )
+                .map(|c| (c, a.tangent(curve.s), b.tangent(curve.t)))
+            } else {
+                let nodes = [oa + sa.index, oa + sa.index + 1, ob + sb.index, ob + sb.index + 1];
+                ContactPoint::from_pair(nodes, &p.closest, contact_distance, mu)
+                    .map(|c| (c, (sa.b - sa.a).normalize(), (sb.b - sb.a).normalize()))
+            };
+            let Some((mut c, ta, tb)) = found else {
+                continue;
+            };
+            if c.gap < 0.0 {
+                c.gap *= self.contact.penetration_recovery;
+            }
+            if self.contact.rolling {
+                let (ea, eb) = (
+                    self.bodies[sa.body].first_edge + sa.index,
+                    self.bodies[sb.body].first_edge + sb.index,
+                );
+                let lever = |radius: f64, t: &Vector3<f64>| -radius * t.cross(&c.normal);
+                c.spin = [(ea, lever(sa.radius, &ta)), (eb, lever(sb.radius, &tb))];
+            }
+            if self.contact.friction_law == FrictionLaw::SlidingDirection {
+                let velocity = |g: usize| {
+                    let body = self.bodies.partition_point(|b| b.first_node <= g) - 1;
+                    self.rods[body].node_velocity(g - self.bodies[body].first_node)
+                };
+                let (nodes, weights) = c.stencil();
+                let mut u = weights[0] * velocity(nodes[0]);
+                for (&g, &w) in nodes.iter().zip(weights).skip(1) {
+                    u += w * velocity(g);
+                }
+                c.sliding_direction = narrow_phase::sliding_direction(&u, &c.normal);
+            }
+            self.contacts.push(c);
+            self.pair_ids.push((p.i, p.j));
+        }
+        Ok(())
+    }
+
+    /// Largest penetration over the detected pairs at the current positions.
+    pub(super) fn max_penetration(&self) -> f64 {
+        let pairs = self.pair_ids.iter().chain(&self.implicit.dropped);
+        pairs.fold(0.0, |worst: f64, &(i, j)| worst.max(self.penetration(i, j)))
+    }
+
+    /// How far segments `i` and `j` overlap at the current positions:
+    /// `r_a + r_b` minus their distance (negative when apart).
+    pub(super) fn penetration(&self, i: usize, j: usize) -> f64 {
+        let (sa, sb) = (&self.segments[i], &self.segments[j]);
+        let distance = match self.contact.geometry {
+            Geometry::Smooth => {
+                let (a, b) = pieces(&self.rods, sa, sb);
+                closest_points_on_pieces(&a, &b).distance
+            }
+            Geometry::Segment => {
+                let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);
+                closest_points(
+                    &ra.node(sa.index),
+                    &ra.node(sa.index + 1),
+                    &rb.node(sb.index),
+                    &rb.node(sb.index + 1),
+                )
+                .distance
+            }
+        };
+        sa.radius + sb.radius - distance
+    }
+}
+
+/// The pieces of the rods' smooth centre lines over segments `sa` and `sb`,
+/// at the rods' current positions.
+fn pieces(rods: &[Rod], sa: &Segment, sb: &Segment) -> (Piece, Piece) {
+    let piece = |seg: &Segment| {
+        let rod = &rods[seg.body];
+        Piece::new(rod.nodes(), seg.index, |i| rod.node(i))
+    };
+    (piece(sa), piece(sb))
+}
+
+/// The largest [`Piece::chord_deviation_bound`] over the rods' pieces.
+fn largest_chord_deviation(rods: &[Rod]) -> f64 {
+    let mut largest: f64 = 0.0;
+    for rod in rods {
+        for e in 0..rod.edges() {
+            largest = largest.max(Piece::new(rod.nodes(), e, |i| rod.node(i)).chord_deviation_bound());
+        }
+    }
+    largest
+}

@@ -1,0 +1,75 @@
+//! The warm start of each contact solve: the forces of the last two solves
+//! by segment pair.
+use nalgebra::Vector3;
+
+/// The contact forces of the last two solves, by segment pair, for the
+/// next solve's warm start.
+#[derive(Default)]
+pub(super) struct ForceHistory {
+    /// Pair ids (sorted) and forces of the last solve, and its step.
+    ids: Vec<(usize, usize)>,
+    forces: Vec<Vector3<f64>>,
+    dt: f64,
+    /// The same for the solve before it.
+    prev_ids: Vec<(usize, usize)>,
+    prev_forces: Vec<Vector3<f64>>,
+    prev_dt: f64,
+}
+
+impl Clone for ForceHistory {
+    fn clone(&self) -> Self {
+        let mut copy = Self::default();
+        copy.clone_from(self);
+        copy
+    }
+
+    /// Reuses this history's buffers (a checkpoint every step allocates nothing).
+    fn clone_from(&mut self, source: &Self) {
+        self.ids.clone_from(&source.ids);
+        self.forces.clone_from(&source.forces);
+        self.dt = source.dt;
+        self.prev_ids.clone_from(&source.prev_ids);
+        self.prev_forces.clone_from(&source.prev_forces);
+        self.prev_dt = source.prev_dt;
+    }
+}
+
+impl ForceHistory {
+    /// The warm start of each of `pair_ids` (sorted) for a step of `dt`:
+    /// where the pair was in contact at the last two solves of this step
+    /// size, the force extrapolated linearly from them (the pull changes
+    /// the forces smoothly, so this is closer to the solution than the last
+    /// force); where only at the last, that force; else zero.
+    pub(super) fn warm_start(&self, pair_ids: &[(usize, usize)], dt: f64, out: &mut Vec<Vector3<f64>>) {
+        out.clear();
+        let extrapolate = self.dt == dt && self.prev_dt == dt;
+        let (mut k, mut m) = (0, 0);
+        for id in pair_ids {
+            while k < self.ids.len() && self.ids[k] < *id {
+                k += 1;
+            }
+            while m < self.prev_ids.len() && self.prev_ids[m] < *id {
+                m += 1;
+            }
+            let last = (k < self.ids.len() && self.ids[k] == *id).then(|| self.forces[k]);
+            let before = (m < self.prev_ids.len() && self.prev_ids[m] == *id).then(|| self.prev_forces[m]);
+            out.push(match (last, before) {
+                (Some(f1), Some(f0)) if extrapolate => 2.0 * f1 - f0,
+                (Some(f1), _) => f1,
+                _ => Vector3::zeros(),
+            });
+        }
+    }
+
+    /// Records a solve's forces: the last solve becomes the one before.
+    pub(super) fn push(&mut self, pair_ids: &[(usize, usize)], forces: &[Vector3<f64>], dt: f64) {
+        std::mem::swap(&mut self.ids, &mut self.prev_ids);
+        std::mem::swap(&mut self.forces, &mut self.prev_forces);
+        self.prev_dt = self.dt;
+        self.ids.clear();
+        self.ids.extend_from_slice(pair_ids);
+        self.forces.clear();
+        self.forces.extend_from_slice(forces);
+        self.dt = dt;
+    }
+}

@@ -23,7 +23,11 @@ async fn infeasible_knots_are_refused_at_submit() {
         (json!({"nodes": 101}), "base.nodes", "need 158"),
         (json!({"length": 100}), "base.h", "L/16000"),
         (json!({"h": 1e-300}), "base.h", "L/16000"),
-        (json!({"h": 0.019}), "base.h", "the knot cannot be built"),
+        (
+            json!({"h": 0.019}),
+            "base.h",
+            "the knot with n = 3 passes cannot be built",
+        ),
     ] {
         let (status, body) = post(&c, &endpoint, &json!({"base": base, "grid": {"mu": [0.1]}})).await;
         assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{base}: {body}");

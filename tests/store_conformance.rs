@@ -220,6 +220,25 @@ async fn cancel_stops_queued_and_running_cases() {
     }
 }
 
+/// Cancelling a sweep whose cases all finished changes nothing: it stays
+/// active (and so reads `done`), and its cases keep their outcomes.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancelling_a_finished_sweep_changes_nothing() {
+    for b in backends("cancel_done").await {
+        let s = &*b.store;
+        let (id, _) = create(s, sweep(cases(1))).await;
+        let c = s.claim("w", LEASE).await.unwrap().unwrap();
+        assert!(s.complete(&c.lease, &report(c.params.clone())).await.unwrap());
+        let before = s.get_sweep(id).await.unwrap().unwrap();
+        let after = s.control_sweep(id, SweepAction::Cancel).await.unwrap();
+        assert_eq!(after.state, SweepState::Active, "{}", b.name);
+        assert_eq!(after.updated_at, before.updated_at, "{}", b.name);
+        let counts = s.sweep_status_counts(id..=id).await.unwrap();
+        assert_eq!(counts, [(id, "completed".to_string(), 1)], "{}", b.name);
+        b.close().await;
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_paused_sweep_hands_out_nothing_until_resumed() {
     for b in backends("pause").await {

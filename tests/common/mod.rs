@@ -186,6 +186,14 @@ pub fn with(base: Value, changes: Value) -> Value {
     base
 }
 
+/// A base without the field `key` (which a grid then varies: a parameter is
+/// given in one place).
+pub fn without(base: Value, key: &str) -> Value {
+    let mut base = base;
+    base.as_object_mut().expect("object").remove(key);
+    base
+}
+
 /// Sends a signal to a child process.
 pub fn signal(child: &std::process::Child, signal: i32) {
     // SAFETY: kill(2) on the pid of a child we spawned and have not reaped.

@@ -2,7 +2,7 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FrictionLaw, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, ParamError, Protocol,
+    Candidates, ContactSolve, FieldError, FrictionLaw, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{self, KnotError, MAX_PASSES, MAX_RADIUS_RATIO, StartShape};
 use serde::{Deserialize, Serialize};
@@ -538,7 +538,7 @@ pub const PARAMETERS: &[Parameter] = &[
 
 impl CaseParams {
     /// A knot builder's refusal as the error of the parameter to change.
-    fn knot_error(&self, e: KnotError) -> ParamError {
+    fn knot_error(&self, e: KnotError) -> FieldError {
         let braid_or_h = if self.braid_length.is_some() {
             "braid_length"
         } else {
@@ -559,7 +559,7 @@ impl CaseParams {
             | KnotError::Infeasible { .. } => braid_or_h,
             KnotError::EndToEndOutOfRange { .. } => "end_to_end",
         };
-        let mut reason = format!("the knot cannot be built: {e}");
+        let mut reason = format!("the knot with n = {} passes cannot be built: {e}", self.n);
         if let KnotError::TooFewNodes { min, .. } = e
             && min > MAX_NODES
         {
@@ -567,7 +567,7 @@ impl CaseParams {
                 " (more than the {MAX_NODES} allowed: use a larger h or a shorter length)"
             ));
         }
-        ParamError {
+        FieldError {
             field: field.to_string(),
             reason,
         }
@@ -577,9 +577,9 @@ impl CaseParams {
     /// ([`knot::checked_start`]), or the knot builder's ([`knot::build`]
     /// itself, so that a case accepted by [`CaseParams::validate`] can always
     /// start); a failure names the parameter to change.
-    pub(super) fn start_shape(&self) -> Result<StartShape, ParamError> {
+    pub(super) fn start_shape(&self) -> Result<StartShape, FieldError> {
         match &self.initial_shape {
-            Some(points) => knot::checked_start(&self.knot_spec(), points).map_err(|reason| ParamError {
+            Some(points) => knot::checked_start(&self.knot_spec(), points).map_err(|reason| FieldError {
                 field: "initial_shape".to_string(),
                 reason,
             }),

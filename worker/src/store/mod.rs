@@ -439,7 +439,8 @@ pub trait Store: Send + Sync + 'static {
     /// The sweep's cases in grid order, with result summaries.
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>>;
     /// Pause, resume or cancel. `NotFound` for an unknown sweep, `Conflict`
-    /// for pausing or resuming a cancelled one.
+    /// for pausing or resuming a cancelled one; cancelling a finished sweep
+    /// (no case queued or running) changes nothing.
     async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord>;
 
     // --- cases (the API) ---

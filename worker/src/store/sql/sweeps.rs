@@ -111,6 +111,8 @@ impl<B: Backend> SqlStore<B> {
             }
             (SweepAction::Pause, _) => SweepState::Paused,
             (SweepAction::Resume, _) => SweepState::Active,
+            // A finished sweep (no case queued or running) stays as it is.
+            (SweepAction::Cancel, state) if Self::open_cases(&mut tx, id).await? == 0 => state,
             (SweepAction::Cancel, _) => SweepState::Cancelled,
         };
         if target != sweep.state {
@@ -129,6 +131,20 @@ impl<B: Backend> SqlStore<B> {
         let record = Self::sweep(&mut tx, id, "").await?.ok_or(StoreError::NotFound)?;
         tx.commit().await?;
         Ok(record)
+    }
+
+    /// The cases of sweep `id` queued or running (by the status words the
+    /// sweep's counts use).
+    async fn open_cases(conn: &mut AnyConnection, id: i64) -> StoreResult<i64> {
+        let row = sqlx::query(
+            "SELECT COUNT(*) AS n FROM sweep_cases sc JOIN cases c ON c.id = sc.case_id \
+             LEFT JOIN results r ON r.case_id = c.id \
+             WHERE sc.sweep_id = $1 AND COALESCE(r.outcome, c.status) IN ('queued', 'running')",
+        )
+        .bind(id)
+        .fetch_one(&mut *conn)
+        .await?;
+        row.int("n")
     }
 
     /// Cancels the cases of sweep `id` that no other sweep wants: queued ones

@@ -468,7 +468,9 @@ async fn get_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetai
     Ok(Json(app.core.sweep(id).await?))
 }
 
-/// Pause: queued cases are not handed out (running ones finish).
+/// Pause: queued cases are not handed out; running ones stop at their next
+/// heartbeat and go back to the queue (computed again on resume) unless an
+/// active sweep also wants them.
 #[utoipa::path(post, path = "/api/sweeps/{id}/pause", tag = "sweeps", params(("id" = i64, Path)),
     responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
         (status = 404, body = ErrorBody), (status = 415, body = ErrorBody),

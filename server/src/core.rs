@@ -205,7 +205,8 @@ impl Core {
         })
     }
 
-    /// Pause (queued cases are not handed out; running ones finish), resume,
+    /// Pause (queued cases are not handed out; running ones go back to the
+    /// queue at their next heartbeat unless an active sweep wants them), resume,
     /// or cancel (queued cases are cancelled, running ones stop at their next
     /// heartbeat; cases another live sweep wants go on).
     pub async fn control(&self, id: i64, action: SweepAction) -> Result<SweepDetail, CoreError> {

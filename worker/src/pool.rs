@@ -403,7 +403,7 @@ async fn heartbeat(ctx: &Ctx, lease: &Lease, run: &SolverRun, state: LeaseState)
         .await
     {
         Ok(Heartbeat::Held { cancel: true }) if state == LeaseState::Held => {
-            tracing::info!("cancel requested: stopping the solver");
+            tracing::info!("cancel or pause requested: stopping the solver");
             run.stop();
             LeaseState::Cancelling
         }

@@ -222,6 +222,12 @@ impl Core {
             state = record.state.as_str(),
             "sweep control"
         );
+        // The embedded workers stop the cases a pause or cancellation reached now.
+        if let Some(pool) = &self.pool
+            && action != SweepAction::Resume
+        {
+            pool.nudge();
+        }
         let cases = self.store.sweep_cases(id).await?;
         Ok(SweepDetail::new(&record, &cases)?)
     }

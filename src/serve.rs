@@ -1,7 +1,7 @@
 //! `knotsweep serve`: the sweep service (HTTP API, embedded workers) on a
 //! local SQLite database.
 use anyhow::{Context, Result};
-use knotsweep_server::{DEFAULT_ADDR, Limits, ServerConfig};
+use knotsweep_server::{AllowedHosts, DEFAULT_ADDR, Limits, ServerConfig};
 use knotsweep_worker::store::RetryPolicy;
 use std::time::Duration;
 
@@ -21,21 +21,32 @@ pub struct Args {
     /// Largest request body (bytes).
     #[arg(long, default_value_t = Limits::DEFAULT.max_body_bytes)]
     max_body_bytes: usize,
+    /// A host name clients reach the server by, besides IP addresses and
+    /// localhost (behind a proxy: its public name); repeat it or separate
+    /// names by commas; `*` allows any. A POST naming another host in `Host`
+    /// or `Origin` is refused (403).
+    #[arg(long = "allowed-host", env = "KNOTSWEEP_ALLOWED_HOSTS", value_delimiter = ',')]
+    allowed_hosts: Vec<String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async {
-        let listener = tokio::net::TcpListener::bind(&args.addr)
-            .await
-            .with_context(|| format!("listening on {}", args.addr))?;
         let token = match std::env::var("KNOTSWEEP_TOKEN") {
             Ok(t) if t.trim().is_empty() => anyhow::bail!(
                 "KNOTSWEEP_TOKEN is set but empty: give a token, or unset it to serve without authentication"
             ),
-            Ok(t) => Some(t),
+            Ok(t) => {
+                knotsweep_server::check_token(&t).map_err(|e| anyhow::anyhow!("KNOTSWEEP_TOKEN: {e}"))?;
+                Some(t)
+            }
             Err(_) => None,
         };
+        let allowed_hosts =
+            AllowedHosts::new(&args.allowed_hosts).map_err(|e| anyhow::anyhow!("--allowed-host: {e}"))?;
+        let listener = tokio::net::TcpListener::bind(&args.addr)
+            .await
+            .with_context(|| format!("listening on {}", args.addr))?;
         let config = ServerConfig {
             database_url: args.queue.database_url.clone(),
             workers: args.queue.workers,
@@ -50,6 +61,7 @@ pub fn run(args: Args) -> Result<()> {
                 ..Limits::DEFAULT
             },
             token: token.clone(),
+            allowed_hosts,
             ..ServerConfig::default()
         };
         let workers = args

@@ -23,7 +23,11 @@ async fn infeasible_knots_are_refused_at_submit() {
         (json!({"nodes": 101}), "base.nodes", "need 158"),
         (json!({"length": 100}), "base.h", "L/16000"),
         (json!({"h": 1e-300}), "base.h", "L/16000"),
-        (json!({"h": 0.019}), "base.h", "the knot cannot be built"),
+        (
+            json!({"h": 0.019}),
+            "base.h",
+            "the knot with n = 3 passes cannot be built",
+        ),
     ] {
         let (status, body) = post(&c, &endpoint, &json!({"base": base, "grid": {"mu": [0.1]}})).await;
         assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{base}: {body}");
@@ -40,7 +44,8 @@ async fn infeasible_knots_are_refused_at_submit() {
     server.shutdown().await.unwrap();
 }
 
-/// 405 and 404 answers carry the JSON error body; 405 keeps `Allow`.
+/// 405 and 404 answers carry the JSON error body (Swagger UI's too); 405
+/// keeps `Allow`.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn error_answers_are_json() {
     let (_dir, db) = temp_db();
@@ -58,7 +63,12 @@ async fn error_answers_are_json() {
     let body: Value = r.json().await.expect("JSON body");
     assert_eq!(body["error"], "method_not_allowed");
     assert!(body["message"].as_str().unwrap().contains("PUT"), "{body}");
-    for path in ["/api/no-such-thing", "/api/sweeps/999", "/nowhere"] {
+    for path in [
+        "/api/no-such-thing",
+        "/api/sweeps/999",
+        "/api/docs/nothing.js",
+        "/nowhere",
+    ] {
         let (status, body) = get(&c, &format!("{url}{path}")).await;
         assert_eq!(status, StatusCode::NOT_FOUND, "{path}");
         assert_eq!(body["error"], "not_found", "{path}: {body}");
@@ -162,16 +172,7 @@ async fn slow_clients_are_cut_off() {
 #[test]
 fn an_empty_token_is_refused_at_start() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(BIN)
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--workers",
-            "0",
-            "--database-url",
-        ])
-        .arg(format!("sqlite://{}", dir.path().join("k.db").display()))
+    let out = serve_command(dir.path())
         .env("KNOTSWEEP_TOKEN", "")
         .output()
         .unwrap();

@@ -220,6 +220,25 @@ async fn cancel_stops_queued_and_running_cases() {
     }
 }
 
+/// Cancelling a sweep whose cases all finished changes nothing: it stays
+/// active (and so reads `done`), and its cases keep their outcomes.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancelling_a_finished_sweep_changes_nothing() {
+    for b in backends("cancel_done").await {
+        let s = &*b.store;
+        let (id, _) = create(s, sweep(cases(1))).await;
+        let c = s.claim("w", LEASE).await.unwrap().unwrap();
+        assert!(s.complete(&c.lease, &report(c.params.clone())).await.unwrap());
+        let before = s.get_sweep(id).await.unwrap().unwrap();
+        let after = s.control_sweep(id, SweepAction::Cancel).await.unwrap();
+        assert_eq!(after.state, SweepState::Active, "{}", b.name);
+        assert_eq!(after.updated_at, before.updated_at, "{}", b.name);
+        let counts = s.sweep_status_counts(id..=id).await.unwrap();
+        assert_eq!(counts, [(id, "completed".to_string(), 1)], "{}", b.name);
+        b.close().await;
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_paused_sweep_hands_out_nothing_until_resumed() {
     for b in backends("pause").await {
@@ -231,6 +250,50 @@ async fn a_paused_sweep_hands_out_nothing_until_resumed() {
         s.control_sweep(id, SweepAction::Resume).await.unwrap();
         assert_eq!(s.queue_depth().await.unwrap(), 1);
         assert!(s.claim("w", LEASE).await.unwrap().is_some(), "{}", b.name);
+        b.close().await;
+    }
+}
+
+/// Pausing hands a running case back at its next heartbeat (queued, the
+/// attempt not counted) unless an active sweep also wants it; resuming
+/// before that heartbeat withdraws the request.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pausing_hands_running_cases_back_unless_an_active_sweep_wants_them() {
+    for b in backends("pause_running").await {
+        let s = &*b.store;
+        let (id, _) = create(s, sweep(cases(1))).await;
+        let running = s.claim("w", LEASE).await.unwrap().unwrap();
+        s.control_sweep(id, SweepAction::Pause).await.unwrap();
+        s.control_sweep(id, SweepAction::Resume).await.unwrap();
+        assert_eq!(
+            s.heartbeat(&running.lease, None, LEASE).await.unwrap(),
+            Heartbeat::Held { cancel: false },
+            "{}: resumed before the heartbeat",
+            b.name
+        );
+        s.control_sweep(id, SweepAction::Pause).await.unwrap();
+        assert_eq!(
+            s.heartbeat(&running.lease, None, LEASE).await.unwrap(),
+            Heartbeat::Held { cancel: true },
+            "{}",
+            b.name
+        );
+        assert!(s.finish_cancelled(&running.lease).await.unwrap());
+        let case = s.get_case(running.lease.case_id).await.unwrap().unwrap();
+        assert_eq!((case.state, case.attempts), (CaseState::Queued, 0), "{}", b.name);
+        assert!(s.claim("w", LEASE).await.unwrap().is_none(), "{}: paused", b.name);
+        s.control_sweep(id, SweepAction::Resume).await.unwrap();
+        let again = s.claim("w", LEASE).await.unwrap().expect("queued again");
+        assert_eq!(again.lease.case_id, running.lease.case_id);
+        // Another active sweep wants it: it goes on.
+        let (other, _) = create(s, sweep(cases(1))).await;
+        s.control_sweep(id, SweepAction::Pause).await.unwrap();
+        assert_eq!(
+            s.heartbeat(&again.lease, None, LEASE).await.unwrap(),
+            Heartbeat::Held { cancel: false },
+            "{}: sweep {other} still wants it",
+            b.name
+        );
         b.close().await;
     }
 }

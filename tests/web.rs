@@ -3,7 +3,8 @@
 //! the form, watch it finish, see its curves and phase diagram (with the
 //! refined twins' error bars), open a case's 3D knot and
 //! move the snapshot slider, cancel a sweep from the list, and get a field error
-//! for a bad value. Screenshots land in `target/tmp/web-*.png`. Without
+//! for a bad value, all without a violation of the page's Content-Security-Policy
+//! (nor in Swagger UI). Screenshots land in `target/tmp/web-*.png`. Without
 //! chromium or chromedriver it is skipped with the reason, or fails when `CI`
 //! is set (`common::missing`).
 mod common;
@@ -165,6 +166,20 @@ impl Browser {
             .unwrap()
     }
 
+    /// Records the page's Content-Security-Policy violations, those before
+    /// this call included (a buffered `ReportingObserver`), for
+    /// [`Browser::csp_violations`].
+    async fn watch_csp(&self) {
+        self.js(WATCH_CSP, json!([])).await;
+    }
+
+    /// The violations recorded since [`Browser::watch_csp`], each
+    /// `directive URL`.
+    async fn csp_violations(&self) -> Value {
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        self.js("return window.cspViolations", json!([])).await
+    }
+
     async fn screenshot(&self, name: &str) {
         let png = self.call(reqwest::Method::GET, "/screenshot", Value::Null).await;
         let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("web-{name}.png"));
@@ -209,6 +224,14 @@ fn base64_decode(text: &str) -> Vec<u8> {
 const FILL: &str = "for (const [id, v] of Object.entries(arguments[0])) { const e = document.getElementById(id); \
     e.value = v; e.dispatchEvent(new Event('input', {bubbles: true})); } return true;";
 
+/// Collects the page's CSP violations into `window.cspViolations`: the events
+/// from now on and, through a buffered `ReportingObserver`, the reports of
+/// those before.
+const WATCH_CSP: &str = "window.cspViolations = []; \
+    document.addEventListener('securitypolicyviolation', (e) => window.cspViolations.push(e.effectiveDirective + ' ' + e.blockedURI)); \
+    new ReportingObserver((reports) => { for (const r of reports) window.cspViolations.push(r.body.effectiveDirective + ' ' + r.body.blockedURL); }, \
+      {types: ['csp-violation'], buffered: true}).observe(); return true;";
+
 /// Non-background pixels of the 3D canvas (read back from WebGL).
 const KNOT_PIXELS: &str = "const c = document.querySelector('#knot canvas'); if (!c) return 0; \
     const gl = c.getContext('webgl2') || c.getContext('webgl'); const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight; \
@@ -235,6 +258,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
             Duration::from_secs(20),
         )
         .await;
+    browser.watch_csp().await;
     // Pulled on to l_k bar 105: mu = 0.1 inverts near 116 in about a second,
     // and so does its refined twin; at mu = 0.05 only the point does.
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
@@ -387,6 +411,8 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .await;
     assert_ne!(label, moved, "the slider changes the snapshot");
     browser.screenshot("case").await;
+    // The form, the plots and the 3D knot ran under the page's policy.
+    assert_eq!(browser.csp_violations().await, json!([]));
 
     // Cancel from the sweeps list.
     let long = submit_sweep(
@@ -682,4 +708,36 @@ async fn sweep_uncertainties(c: &reqwest::Client, url: &str, id: i64) -> (usize,
     let bars = inverted.iter().filter(|u| !u["absolute"].is_null()).count();
     let unconverged = inverted.iter().filter(|u| u["converged"] == false).count();
     (bars, unconverged)
+}
+
+/// Swagger UI under `/api/docs/` renders the API's operations under the
+/// Content-Security-Policy every answer carries, without a violation.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_api_docs_render_under_the_content_security_policy() {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => return missing(&why),
+    };
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let url = server.url();
+    browser.open(&format!("{url}/api/docs/")).await;
+    let operations = browser
+        .until(
+            "Swagger UI's operations",
+            "return document.querySelectorAll('.swagger-ui .opblock').length",
+            Duration::from_secs(20),
+        )
+        .await;
+    assert!(operations.as_u64().unwrap() >= 10, "{operations}");
+    browser.watch_csp().await;
+    browser
+        .js(
+            "document.querySelector('.swagger-ui .opblock-summary').click(); return true",
+            json!([]),
+        )
+        .await;
+    assert_eq!(browser.csp_violations().await, json!([]));
+    browser.screenshot("api-docs").await;
+    server.shutdown().await.unwrap();
 }

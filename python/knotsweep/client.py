@@ -100,11 +100,9 @@ class Client:
         return response
 
     def _post(self, path: str, body: Any = None, headers: dict | None = None) -> httpx.Response:
-        if body is None:
-            response = self.http.post(path, headers=headers)
-        else:
-            response = self.http.post(path, content=json.dumps(body), headers={
-                "Content-Type": "application/json", **(headers or {})})
+        # The server takes every POST as JSON only (415 otherwise), a bodiless one too.
+        response = self.http.post(path, content=json.dumps({} if body is None else body), headers={
+            "Content-Type": "application/json", **(headers or {})})
         _raise_for(response)
         return response
 

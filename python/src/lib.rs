@@ -9,7 +9,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Value};
-use solver::case::{Group, PARAMETERS, ParamError, Range, ValidCase};
+use solver::case::{Group, PARAMETERS, FieldError, Range, ValidCase};
 use solver::measurements::{COLUMNS, Column, Sample};
 use solver::protocol::{self, Progress, Status};
 use std::time::{Duration, Instant};
@@ -98,7 +98,7 @@ fn finite(x: f64) -> Result<Value, String> {
 }
 
 /// The keywords as a partial `CaseParams` object, or the problems with them.
-fn partial(params: &Bound<'_, PyDict>) -> Result<Map<String, Value>, Vec<ParamError>> {
+fn partial(params: &Bound<'_, PyDict>) -> Result<Map<String, Value>, Vec<FieldError>> {
     let mut object = Map::new();
     let mut errors = Vec::new();
     for (key, value) in params.iter() {
@@ -107,7 +107,7 @@ fn partial(params: &Bound<'_, PyDict>) -> Result<Map<String, Value>, Vec<ParamEr
             Ok(v) => {
                 object.insert(field, v);
             }
-            Err(reason) => errors.push(ParamError { field, reason }),
+            Err(reason) => errors.push(FieldError { field, reason }),
         }
     }
     if errors.is_empty() {
@@ -117,7 +117,7 @@ fn partial(params: &Bound<'_, PyDict>) -> Result<Map<String, Value>, Vec<ParamEr
     }
 }
 
-fn parameter_error(py: Python<'_>, errors: &[ParamError]) -> PyErr {
+fn parameter_error(py: Python<'_>, errors: &[FieldError]) -> PyErr {
     let message = errors
         .iter()
         .map(ToString::to_string)

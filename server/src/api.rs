@@ -20,26 +20,30 @@
 //! Limits: request bodies of at most [`Limits::max_body_bytes`] (413 beyond),
 //! at most [`Limits::max_cases`] cases per sweep (422 beyond). With a token
 //! configured (`KNOTSWEEP_TOKEN`), every request other than GET/HEAD/OPTIONS
-//! needs `Authorization: Bearer <token>` (401 otherwise).
+//! needs `Authorization: Bearer <token>` (401 otherwise). Every POST, token
+//! or not, passes the cross-site guards of [`crate::guard`] (415, 403), and
+//! every answer carries its security headers.
 use crate::core::Core;
 use crate::error::{ApiError, ErrorBody};
+use crate::events::Feeds;
 use crate::extract::{Id, MAX_PAGE, Page, Paging, Submission};
-use crate::spec::{FieldError, Limits, Preset, SweepSpec};
+use crate::guard::{self, AllowedHosts};
+use crate::spec::{Limits, Preset, SweepSpec};
 use crate::views::*;
-use axum::extract::{DefaultBodyLimit, FromRef, Path, Request, State};
+use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRef, Path, Request, State};
 use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::{get, post};
-use axum::{Json, Router};
+use axum::{Extension, Json, Router};
 use futures_util::{Stream, StreamExt};
 use knotsweep_worker::store::SweepAction;
 use report::charts::Quantity;
 use std::convert::Infallible;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Duration;
-use tokio::sync::watch;
-use utoipa::openapi::security::{HttpAuthScheme, HttpBuilder, SecurityScheme};
+use utoipa::openapi::security::{HttpAuthScheme, HttpBuilder, SecurityRequirement, SecurityScheme};
 use utoipa::openapi::{OpenApi as OpenApiDoc, RefOr};
 use utoipa::{Modify, OpenApi};
 use utoipa_swagger_ui::SwaggerUi;
@@ -50,15 +54,23 @@ pub struct App {
     pub core: Core,
     /// Bearer token required for mutating requests.
     pub token: Option<String>,
-    /// Flips to true at shutdown (ends the event streams).
-    pub shutdown: watch::Receiver<bool>,
-    /// Interval of the event streams' polls.
-    pub events_interval: Duration,
+    /// Host names a `POST` may name ([`crate::guard`]).
+    pub allowed_hosts: AllowedHosts,
+    /// The sweeps' event feeds.
+    pub feeds: Feeds,
+    /// Time allowed for a request's body (408 beyond).
+    pub body_read_timeout: Duration,
 }
 
 impl FromRef<App> for Limits {
     fn from_ref(app: &App) -> Self {
         *app.core.limits()
+    }
+}
+
+impl FromRef<App> for AllowedHosts {
+    fn from_ref(app: &App) -> Self {
+        app.allowed_hosts.clone()
     }
 }
 
@@ -88,21 +100,34 @@ pub fn router(app: App) -> Router {
         .route("/api/cases/{id}/snapshots.zip", get(case_snapshots_zip))
         .route("/api/cases/{id}/figures/{figure}", get(case_figure))
         .route("/api/sweeps/{id}/figures/{figure}", get(sweep_figure))
-        .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi()))
+        .merge(SwaggerUi::new("/api/docs").url("/api/openapi.json", openapi(app.token.is_some())))
         .fallback(not_found)
-        .layer(axum::middleware::from_fn(json_method_not_allowed))
+        .layer(axum::middleware::from_fn(json_errors))
         .layer(DefaultBodyLimit::max(limits.max_body_bytes))
         .layer(tower_http::timeout::RequestBodyTimeoutLayer::new(
-            crate::http::BODY_READ_TIMEOUT,
+            app.body_read_timeout,
         ))
         .layer(axum::middleware::from_fn_with_state(app.clone(), auth))
+        .layer(axum::middleware::from_fn_with_state(
+            app.clone(),
+            guard::cross_site,
+        ))
+        .layer(axum::middleware::from_fn(guard::security_headers))
         .layer(tower_http::trace::TraceLayer::new_for_http());
     api.with_state(app)
 }
 
-/// The OpenAPI document.
-pub fn openapi() -> OpenApiDoc {
-    ApiDoc::openapi()
+/// The OpenAPI document; with `token`, its `POST` routes require the bearer
+/// token (without, they require nothing).
+pub fn openapi(token: bool) -> OpenApiDoc {
+    let mut doc = ApiDoc::openapi();
+    let required = token.then(|| vec![SecurityRequirement::new("bearer", Vec::<String>::new())]);
+    for item in doc.paths.paths.values_mut() {
+        if let Some(post) = &mut item.post {
+            post.security = required.clone();
+        }
+    }
+    doc
 }
 
 #[derive(OpenApi)]
@@ -121,7 +146,7 @@ pub fn openapi() -> OpenApiDoc {
         phase_diagram, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
     ),
     components(schemas(
-        SweepSpec, FieldError, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
+        SweepSpec, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
         SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
         LogLineView, Health, SweepEvent, RunningCase, ServiceLimits, MaterialView
     )),
@@ -149,6 +174,10 @@ impl Modify for Extras {
         components
             .schemas
             .insert("CaseParams".to_string(), RefOr::T(params));
+        components.schemas.insert(
+            "FieldError".to_string(),
+            RefOr::T(crate::openapi::field_error_schema()),
+        );
         components.add_security_scheme(
             "bearer",
             SecurityScheme::Http(HttpBuilder::new().scheme(HttpAuthScheme::Bearer).build()),
@@ -202,10 +231,19 @@ fn bearer_token(value: &str) -> Option<&str> {
 }
 
 /// Gives the router's bodiless 405 answers the JSON error body (keeping
-/// their `Allow` header).
-async fn json_method_not_allowed(request: Request, next: Next) -> Response {
+/// their `Allow` header), and any 404 under `/api/` that is not JSON (Swagger
+/// UI's) the API's.
+async fn json_errors(request: Request, next: Next) -> Response {
     let method = request.method().clone();
+    let api = request.uri().path().starts_with("/api/");
     let response = next.run(request).await;
+    let json = response
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .is_some_and(|t| t.as_bytes().starts_with(b"application/json"));
+    if api && response.status() == StatusCode::NOT_FOUND && !json {
+        return not_found().await.into_response();
+    }
     if response.status() != StatusCode::METHOD_NOT_ALLOWED {
         return response;
     }
@@ -354,11 +392,13 @@ async fn list_materials() -> Json<Vec<MaterialView>> {
         (status = 200, description = "Idempotent replay of an earlier submission", body = SubmitResponse),
         (status = 400, description = "Malformed JSON or header", body = ErrorBody),
         (status = 401, description = "Token required", body = ErrorBody),
+        (status = 403, description = "A foreign Host or Origin (docs/API.md, \"Cross-site requests\")", body = ErrorBody),
+        (status = 408, description = "The body did not arrive in time", body = ErrorBody),
         (status = 409, description = "Idempotency-Key reused with another body", body = ErrorBody),
         (status = 413, description = "Body too large", body = ErrorBody),
+        (status = 415, description = "Not application/json", body = ErrorBody),
         (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
-    ),
-    security((), ("bearer" = [])))]
+    ))]
 async fn submit_sweep(State(app): State<App>, submission: Submission) -> Result<Response, ApiError> {
     let Submission {
         idempotency_key,
@@ -428,51 +468,59 @@ async fn get_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetai
     Ok(Json(app.core.sweep(id).await?))
 }
 
-/// Pause: queued cases are not handed out (running ones finish).
+/// Pause: queued cases are not handed out; running ones stop at their next
+/// heartbeat and go back to the queue (computed again on resume) unless an
+/// active sweep also wants them.
 #[utoipa::path(post, path = "/api/sweeps/{id}/pause", tag = "sweeps", params(("id" = i64, Path)),
-    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody),
-        (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
-    security((), ("bearer" = [])))]
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 415, body = ErrorBody),
+        (status = 409, description = "The sweep is cancelled", body = ErrorBody)))]
 async fn pause_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
     Ok(Json(app.core.control(id, SweepAction::Pause).await?))
 }
 
 /// Resume a paused sweep.
 #[utoipa::path(post, path = "/api/sweeps/{id}/resume", tag = "sweeps", params(("id" = i64, Path)),
-    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody),
-        (status = 409, description = "The sweep is cancelled", body = ErrorBody)),
-    security((), ("bearer" = [])))]
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 415, body = ErrorBody),
+        (status = 409, description = "The sweep is cancelled", body = ErrorBody)))]
 async fn resume_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
     Ok(Json(app.core.control(id, SweepAction::Resume).await?))
 }
 
 /// Cancel: queued cases are cancelled, running ones stop at their next
-/// heartbeat (cases another live sweep also wants go on).
+/// heartbeat (cases another live sweep also wants go on); a finished sweep is
+/// left as it is.
 #[utoipa::path(post, path = "/api/sweeps/{id}/cancel", tag = "sweeps", params(("id" = i64, Path)),
-    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 404, body = ErrorBody)),
-    security((), ("bearer" = [])))]
+    responses((status = 200, body = SweepDetail), (status = 401, body = ErrorBody), (status = 403, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 415, body = ErrorBody)))]
 async fn cancel_sweep(State(app): State<App>, Id(id): Id) -> Result<Json<SweepDetail>, ApiError> {
     Ok(Json(app.core.control(id, SweepAction::Cancel).await?))
 }
 
-/// Server-sent events: `progress` (a [`SweepEvent`]) whenever the sweep
-/// changes, then one `done` event when it is finished or cancelled.
+/// Server-sent events: `progress` (a [`SweepEvent`]) now and whenever the
+/// sweep changes, then one `done` event when it is finished or cancelled,
+/// after which the stream ends; open streams are capped per sweep and per
+/// client address ([`crate::events`]).
 #[utoipa::path(get, path = "/api/sweeps/{id}/events", tag = "sweeps", params(("id" = i64, Path)),
     responses((status = 200, description = "text/event-stream of `progress` and `done` events whose data is a SweepEvent",
-        content_type = "text/event-stream", body = SweepEvent), (status = 404, body = ErrorBody)))]
+        content_type = "text/event-stream", body = SweepEvent), (status = 404, body = ErrorBody),
+        (status = 429, description = "Too many streams open for this sweep or from this address", body = ErrorBody)))]
 async fn sweep_events(
     State(app): State<App>,
     Id(id): Id,
+    peer: Option<Extension<ConnectInfo<SocketAddr>>>,
 ) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
-    let updates = app
-        .core
-        .events(id, app.events_interval, app.shutdown.clone())
-        .await?;
+    // In-process callers (tests) have no peer: one bucket for all of them.
+    let client = peer.map_or(IpAddr::V4(Ipv4Addr::UNSPECIFIED), |Extension(ConnectInfo(a))| {
+        a.ip()
+    });
+    let updates = app.feeds.subscribe(id, client).await?;
     let stream = updates.map(|update| {
         let data = serde_json::to_string(update.event()).expect("event serialises");
         Ok(Event::default().event(update.name()).data(data))
     });
-    Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(Duration::from_secs(15))))
+    Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(crate::events::HEARTBEAT)))
 }
 
 /// The phase diagram: for each case its varied parameters, status and

@@ -2,11 +2,12 @@
 //! `knotsweep sweep`) as a method over the store, returning the views of
 //! [`crate::views`]. The HTTP handlers in [`crate::api`] only extract, call
 //! one of these and serialise.
+use crate::computing::Computing;
 use crate::error::CoreError;
+use crate::events::SweepStamp;
 use crate::spec::{self, Expanded, FieldError, Limits, SweepSpec};
 use crate::strict_json;
 use crate::views::{self, *};
-use futures_util::Stream;
 use knotsweep_worker::pool::PoolHandle;
 use knotsweep_worker::store::{
     CaseRecord, CreateOutcome, Idempotency, NewCase, NewSweep, Store, SweepAction, SweepRecord,
@@ -18,8 +19,7 @@ use solver::protocol::Snapshot;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
-use tokio::sync::watch;
+use std::time::Instant;
 
 /// The service's operations.
 #[derive(Clone)]
@@ -31,6 +31,8 @@ pub struct Core {
     /// The simplified model's snap by (n, h bits): computed once (about 0.4 s
     /// each), concurrent first requests waiting on the same computation.
     simplified: Arc<Mutex<SimplifiedSnaps>>,
+    /// Slots for the requests' CPU-bound work, one per core.
+    computing: Computing,
 }
 
 /// The simplified model's snaps, computed or under way, by (n, bits of h).
@@ -44,6 +46,7 @@ impl Core {
             pool,
             started: Instant::now(),
             simplified: Arc::default(),
+            computing: Computing::per_core(),
         }
     }
 
@@ -56,13 +59,13 @@ impl Core {
     /// parsed body (for the idempotency hash).
     pub fn parse_spec(body: &[u8]) -> Result<(SweepSpec, Value), CoreError> {
         if body.iter().all(u8::is_ascii_whitespace) {
-            return Err(CoreError::BadRequest(
-                "body".to_string(),
-                "empty body: send a JSON object ({} is one case at the paper's defaults)".to_string(),
+            return Err(CoreError::bad_request(
+                "body",
+                "empty body: send a JSON object ({} is one case at the paper's defaults)",
             ));
         }
         let value = strict_json::parse(body)
-            .map_err(|e| CoreError::BadRequest("body".to_string(), format!("malformed JSON: {e}")))?;
+            .map_err(|e| CoreError::bad_request("body", format!("malformed JSON: {e}")))?;
         if !value.is_object() {
             return Err(CoreError::Invalid(vec![FieldError::new(
                 "body",
@@ -102,7 +105,13 @@ impl Core {
         if let Some(key) = idempotency_key {
             self.check_idempotency_key(key)?;
         }
-        let expanded = spec::expand(&spec, &self.limits).map_err(CoreError::Invalid)?;
+        // Every point's knot is built here (tens of milliseconds each): off the async runtime.
+        let (given, limits) = (spec.clone(), self.limits);
+        let expanded = self
+            .computing
+            .run(move || spec::expand(&given, &limits))
+            .await?
+            .map_err(CoreError::Invalid)?;
         let cases = expanded.cases.len();
         let new = new_sweep(&spec, raw, expanded, idempotency_key);
         let (record, replayed) = match self.store.create_sweep(new).await? {
@@ -134,7 +143,7 @@ impl Core {
     /// An `Idempotency-Key` has 1 to `max_idempotency_key_len` printable
     /// ASCII characters, no spaces (400 otherwise).
     fn check_idempotency_key(&self, key: &str) -> Result<(), CoreError> {
-        let bad = |reason: String| Err(CoreError::BadRequest("Idempotency-Key".to_string(), reason));
+        let bad = |reason: String| Err(CoreError::bad_request("Idempotency-Key", reason));
         let longest = self.limits.max_idempotency_key_len;
         if key.is_empty() || key.chars().count() > longest {
             return bad(format!("must have 1 to {longest} characters"));
@@ -183,31 +192,21 @@ impl Core {
         Ok(SweepDetail::new(&record, &cases)?)
     }
 
-    /// The sweep's progress as a stream: an update whenever it changes (polled
-    /// every `interval`), then a last one when it is finished or cancelled; it
-    /// also ends when `shutdown` turns true. 404 when there is no such sweep.
-    pub async fn events(
-        &self,
-        id: i64,
-        interval: Duration,
-        shutdown: watch::Receiver<bool>,
-    ) -> Result<impl Stream<Item = SweepUpdate> + use<>, CoreError> {
-        let state = EventState {
-            core: self.clone(),
-            id,
-            interval,
-            shutdown,
-            pending: Some(self.sweep(id).await?),
-            last: None,
-            done: false,
-        };
-        Ok(futures_util::stream::unfold(state, |mut st| async move {
-            let update = st.next().await?;
-            Some((update, st))
-        }))
+    /// What sweep `id`'s event feed polls ([`crate::events`]): its state and
+    /// counts per status, one grouped query rather than its cases. 404 when
+    /// there is no such sweep.
+    pub(crate) async fn sweep_stamp(&self, id: i64) -> Result<SweepStamp, CoreError> {
+        let record = self.record(id).await?;
+        let counts = self.store.sweep_status_counts(id..=id).await?;
+        Ok(SweepStamp {
+            state: record.state,
+            updated_at: record.updated_at,
+            counts: counts.into_iter().map(|(_, status, n)| (status, n)).collect(),
+        })
     }
 
-    /// Pause (queued cases are not handed out; running ones finish), resume,
+    /// Pause (queued cases are not handed out; running ones go back to the
+    /// queue at their next heartbeat unless an active sweep wants them), resume,
     /// or cancel (queued cases are cancelled, running ones stop at their next
     /// heartbeat; cases another live sweep wants go on).
     pub async fn control(&self, id: i64, action: SweepAction) -> Result<SweepDetail, CoreError> {
@@ -223,6 +222,12 @@ impl Core {
             state = record.state.as_str(),
             "sweep control"
         );
+        // The embedded workers stop the cases a pause or cancellation reached now.
+        if let Some(pool) = &self.pool
+            && action != SweepAction::Resume
+        {
+            pool.nudge();
+        }
         let cases = self.store.sweep_cases(id).await?;
         Ok(SweepDetail::new(&record, &cases)?)
     }
@@ -312,7 +317,9 @@ impl Core {
             .get_or_init(|| async move {
                 // A failure leaves the point without its reference line (the
                 // field is null), logged here with its reason.
-                match tokio::task::spawn_blocking(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
+                match self
+                    .computing
+                    .run(move || solver::simplified::reproduce::snap_l_k_bar(n, h))
                     .await
                 {
                     Ok(Ok(snap)) => snap,
@@ -538,60 +545,6 @@ fn with_twins(points: Vec<spec::GridCase>, twins: Vec<solver::case::CaseParams>)
         cases[point].twin_position = Some(position);
     }
     cases
-}
-
-/// Where a sweep's event stream is.
-struct EventState {
-    core: Core,
-    id: i64,
-    interval: Duration,
-    shutdown: watch::Receiver<bool>,
-    /// A detail read but not yet reported.
-    pending: Option<SweepDetail>,
-    /// The last event sent.
-    last: Option<SweepEvent>,
-    done: bool,
-}
-
-impl EventState {
-    /// The next update: the sweep's event when it differs from the last one
-    /// sent, `Done` once finished; none after that, at shutdown or when the
-    /// sweep can no longer be read.
-    async fn next(&mut self) -> Option<SweepUpdate> {
-        if self.done {
-            return None;
-        }
-        loop {
-            let detail = match self.pending.take() {
-                Some(d) => d,
-                None => {
-                    if *self.shutdown.borrow() {
-                        return None;
-                    }
-                    tokio::select! {
-                        _ = tokio::time::sleep(self.interval) => {}
-                        _ = self.shutdown.changed() => return None,
-                    }
-                    match self.core.sweep(self.id).await {
-                        Ok(detail) => detail,
-                        Err(e) => {
-                            tracing::warn!(sweep_id = self.id, error = %e, "event stream ended: the sweep cannot be read");
-                            return None;
-                        }
-                    }
-                }
-            };
-            let event = SweepEvent::from(&detail);
-            if matches!(event.status, SweepStatus::Done | SweepStatus::Cancelled) {
-                self.done = true;
-                return Some(SweepUpdate::Done(event));
-            }
-            if self.last.as_ref() != Some(&event) {
-                self.last = Some(event.clone());
-                return Some(SweepUpdate::Progress(event));
-            }
-        }
-    }
 }
 
 /// `files` deflated into a zip archive.

@@ -1,6 +1,8 @@
 //! Errors of the core and their HTTP form: `{"error": kind, "message": text,
 //! "fields": [{"field", "reason"}]}` with 400 (malformed), 401 (token), 404,
-//! 409 (conflict), 413 (body too large), 422 (invalid values) or 503 (store).
+//! 409 (conflict), 413 (body too large), 422 (invalid values), 429 (too many
+//! event streams) or 503 (store). A store's or the server's own failure is
+//! logged with its detail and answered without it.
 use crate::spec::FieldError;
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
@@ -15,17 +17,33 @@ pub enum CoreError {
     #[error("invalid input")]
     Invalid(Vec<FieldError>),
     /// Malformed input (400).
-    #[error("{1}")]
-    BadRequest(String, String),
+    #[error("{field}: {reason}")]
+    BadRequest { field: String, reason: String },
     #[error("{0} not found")]
     NotFound(String),
     #[error("{0}")]
     Conflict(String),
+    /// Over a per-client or per-sweep cap (429).
+    #[error("{0}")]
+    TooMany(String),
     #[error("storage: {0}")]
     Store(StoreError),
     /// A figure or an archive could not be made (500).
     #[error("figure: {0}")]
     Figure(String),
+    /// A computation of the server's own failed (500; the detail is logged).
+    #[error("internal: {0}")]
+    Internal(String),
+}
+
+impl CoreError {
+    /// Malformed input (400) at `field`.
+    pub fn bad_request(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self::BadRequest {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
 }
 
 impl From<StoreError> for CoreError {
@@ -41,11 +59,14 @@ impl From<StoreError> for CoreError {
 /// The JSON body of every error response.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct ErrorBody {
-    /// `invalid_input`, `bad_request`, `unauthorized`, `not_found`,
-    /// `conflict`, `payload_too_large`, `unavailable`.
+    /// `invalid_input`, `bad_request`, `unauthorized`, `forbidden`,
+    /// `not_found`, `method_not_allowed`, `conflict`, `request_timeout`,
+    /// `payload_too_large`, `unsupported_media_type`, `too_many_requests`,
+    /// `internal`, `unavailable`.
     pub error: String,
     pub message: String,
     /// The offending fields (may be empty).
+    #[schema(schema_with = crate::openapi::field_errors)]
     pub fields: Vec<FieldError>,
 }
 
@@ -99,7 +120,7 @@ impl From<CoreError> for ApiError {
                     .join("; ");
                 Self::new(StatusCode::UNPROCESSABLE_ENTITY, "invalid_input", message, fields)
             }
-            CoreError::BadRequest(field, reason) => Self::bad_request(&field, reason),
+            CoreError::BadRequest { field, reason } => Self::bad_request(&field, reason),
             CoreError::NotFound(what) => Self::new(
                 StatusCode::NOT_FOUND,
                 "not_found",
@@ -107,6 +128,7 @@ impl From<CoreError> for ApiError {
                 vec![],
             ),
             CoreError::Conflict(m) => Self::new(StatusCode::CONFLICT, "conflict", m, vec![]),
+            CoreError::TooMany(m) => Self::new(StatusCode::TOO_MANY_REQUESTS, "too_many_requests", m, vec![]),
             CoreError::Figure(m) => {
                 tracing::error!(error = %m, "figure failed");
                 Self::new(
@@ -116,12 +138,21 @@ impl From<CoreError> for ApiError {
                     vec![],
                 )
             }
+            CoreError::Internal(m) => {
+                tracing::error!(error = %m, "internal error");
+                Self::new(
+                    StatusCode::INTERNAL_SERVER_ERROR,
+                    "internal",
+                    "the server failed to answer this request; its log has the detail",
+                    vec![],
+                )
+            }
             CoreError::Store(e) => {
                 tracing::error!(error = %e, "store error");
                 Self::new(
                     StatusCode::SERVICE_UNAVAILABLE,
                     "unavailable",
-                    format!("storage error: {e}"),
+                    "the database is unavailable; try again later (the server's log has the detail)",
                     vec![],
                 )
             }

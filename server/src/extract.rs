@@ -9,7 +9,7 @@ use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::{FromRef, FromRequest, FromRequestParts, Path, Query, Request};
 use axum::http::request::Parts;
-use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::http::{HeaderMap, StatusCode};
 use serde_json::Value;
 
 /// A numeric path id; anything else is a 400 naming the field.
@@ -31,18 +31,21 @@ impl<S: Send + Sync> FromRequestParts<S> for Id {
 
 /// Largest `limit` of a paginated list.
 pub const MAX_PAGE: usize = 1000;
+/// Largest `offset` of a paginated list (the stores count in `i64`).
+pub const MAX_OFFSET: usize = i64::MAX as usize;
 
 /// One page of a list (`GET /api/sweeps`, `GET /api/sweeps/{id}/cases`).
 #[derive(serde::Deserialize, utoipa::IntoParams)]
 pub struct Page {
     /// Items per page, 1..=1000 (default 100).
     limit: Option<usize>,
-    /// Items to skip, in the list's order (default 0).
+    /// Items to skip, in the list's order (default 0, at most 2^63 - 1).
     offset: Option<usize>,
 }
 
 /// The page asked for: `limit` in 1..=[`MAX_PAGE`] (default 100), `offset`
-/// (default 0); a malformed query or a limit out of range is a 400.
+/// in 0..=[`MAX_OFFSET`] (default 0); a malformed query or a number out of
+/// range is a 400.
 #[derive(Clone, Copy)]
 pub struct Paging {
     pub limit: usize,
@@ -63,19 +66,24 @@ impl<S: Send + Sync> FromRequestParts<S> for Paging {
                 format!("must be in 1..={MAX_PAGE}, got {limit}"),
             ));
         }
-        Ok(Self {
-            limit,
-            offset: page.offset.unwrap_or(0),
-        })
+        let offset = page.offset.unwrap_or(0);
+        if offset > MAX_OFFSET {
+            return Err(ApiError::bad_request(
+                "offset",
+                format!("must be in 0..={MAX_OFFSET}, got {offset}"),
+            ));
+        }
+        Ok(Self { limit, offset })
     }
 }
 
 /// A sweep submission: the `Idempotency-Key` header, if given, and the sweep
 /// specification read strictly from the body. Faults are answered in this
-/// order: the body's size (413 beyond [`Limits::max_body_bytes`], 400 when
-/// cut short) and media type (415 unless `application/json`, when a type is
-/// given), the header (400 when given twice or not visible ASCII; its length
-/// and characters are the core's to check), then the JSON
+/// order (after the media type, which [`crate::guard`] checks first: 415
+/// unless `application/json`): the body's size and pace (413 beyond
+/// [`Limits::max_body_bytes`], 408 when it does not arrive in time, 400 when
+/// cut short), the header (400 when given twice or not visible ASCII; its
+/// length and characters are the core's to check), then the JSON
 /// ([`Core::parse_spec`]: 400 when malformed or naming a key twice, 422 for
 /// unknown fields and wrong types). `raw` is the parsed body (for the
 /// idempotency hash).
@@ -94,13 +102,9 @@ where
     async fn from_request(request: Request, state: &S) -> Result<Self, Self::Rejection> {
         let limit = Limits::from_ref(state).max_body_bytes;
         let idempotency_key = idempotency_key(request.headers());
-        let content_type = request.headers().get(header::CONTENT_TYPE).cloned();
         let body = Bytes::from_request(request, state)
             .await
             .map_err(|e| unreadable(e, limit))?;
-        if let Some(content_type) = content_type {
-            json_media_type(&content_type)?;
-        }
         let idempotency_key = idempotency_key?;
         let (spec, raw) = Core::parse_spec(&body)?;
         Ok(Self {
@@ -124,15 +128,24 @@ fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, ApiError> {
         .map_err(|_| ApiError::bad_request("Idempotency-Key", "must be printable ASCII"))
 }
 
-/// A body that could not be read: too large (413) or cut short (400).
+/// A body that could not be read: too large (413), too slow (408) or cut
+/// short (400).
 fn unreadable(e: BytesRejection, limit: usize) -> ApiError {
-    let status = e.status();
-    let kind = if status == StatusCode::PAYLOAD_TOO_LARGE {
-        "payload_too_large"
+    let (status, kind, reason) = if timed_out(&e) {
+        (
+            StatusCode::REQUEST_TIMEOUT,
+            "request_timeout",
+            "the body did not arrive in time".to_string(),
+        )
+    } else if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+        (
+            e.status(),
+            "payload_too_large",
+            format!("{} (limit {limit} bytes)", e.body_text()),
+        )
     } else {
-        "bad_request"
+        (e.status(), "bad_request", e.body_text())
     };
-    let reason = format!("{} (limit {limit} bytes)", e.body_text());
     ApiError::new(
         status,
         kind,
@@ -141,22 +154,14 @@ fn unreadable(e: BytesRejection, limit: usize) -> ApiError {
     )
 }
 
-/// 415 unless the media type is `application/json` (any parameters).
-fn json_media_type(content_type: &HeaderValue) -> Result<(), ApiError> {
-    let media = content_type
-        .to_str()
-        .unwrap_or("")
-        .split(';')
-        .next()
-        .unwrap_or("")
-        .trim();
-    if media.eq_ignore_ascii_case("application/json") {
-        return Ok(());
+/// The body's read timed out (`RequestBodyTimeoutLayer`).
+fn timed_out(e: &BytesRejection) -> bool {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(error) = source {
+        if error.is::<tower_http::timeout::TimeoutError>() {
+            return true;
+        }
+        source = error.source();
     }
-    Err(ApiError::new(
-        StatusCode::UNSUPPORTED_MEDIA_TYPE,
-        "unsupported_media_type",
-        format!("Content-Type must be application/json, got {media:?}"),
-        vec![FieldError::new("Content-Type", "must be application/json")],
-    ))
+    false
 }

@@ -5,6 +5,9 @@
 //! [`MAX_CONNECTIONS`] connections are open at once (more are closed at
 //! accept), and shutdown lets in-flight requests finish.
 use axum::Router;
+use axum::extract::ConnectInfo;
+use axum::http::Request;
+use hyper::body::Incoming;
 use hyper_util::rt::{TokioIo, TokioTimer};
 use hyper_util::server::graceful::GracefulShutdown;
 use hyper_util::service::TowerToHyperService;
@@ -12,6 +15,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use tokio::net::TcpListener;
 use tokio::sync::{Semaphore, watch};
+use tower::util::MapRequest;
 
 /// Default time allowed for a request's headers, from the first byte (slowloris).
 pub const HEADER_READ_TIMEOUT: Duration = Duration::from_secs(10);
@@ -50,7 +54,14 @@ pub async fn serve(
             tracing::warn!(%peer, limit = MAX_CONNECTIONS, "connection refused: too many open connections");
             continue;
         };
-        let service = TowerToHyperService::new(router.clone());
+        // The handlers see the client's address (the event streams' cap per client).
+        let service = TowerToHyperService::new(MapRequest::new(
+            router.clone(),
+            move |mut request: Request<Incoming>| {
+                request.extensions_mut().insert(ConnectInfo(peer));
+                request
+            },
+        ));
         let connection = graceful.watch(http.serve_connection(TokioIo::new(stream), service));
         tokio::spawn(async move {
             if let Err(e) = connection.await {

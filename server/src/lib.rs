@@ -9,12 +9,17 @@
 //! - [`api`]: axum handlers, thin adapters over the core (their inputs read by
 //!   the extractors of `extract`), and the OpenAPI document; [`views`] and
 //!   [`error`]: the JSON they return, built from the store's records;
+//!   [`guard`]: the cross-site guards and security headers; [`events`]: the
+//!   sweeps' event feeds;
 //! - [`start`]: the server with its embedded worker pool (one case per core
 //!   on a rayon pool, off the async runtime) and graceful shutdown.
 pub mod api;
+mod computing;
 pub mod core;
 pub mod error;
+pub mod events;
 mod extract;
+pub mod guard;
 mod http;
 pub mod openapi;
 pub mod spec;
@@ -32,6 +37,8 @@ use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
 pub use crate::core::Core;
+pub use crate::events::StreamLimits;
+pub use crate::guard::AllowedHosts;
 pub use crate::spec::{Limits, SweepSpec};
 
 /// Default database: `knotsweep.sqlite` in the working directory.
@@ -51,12 +58,19 @@ pub struct ServerConfig {
     pub poll: Duration,
     pub retry: RetryPolicy,
     pub limits: Limits,
-    /// Bearer token for mutating requests (`KNOTSWEEP_TOKEN`).
+    /// Bearer token for mutating requests (`KNOTSWEEP_TOKEN`; [`check_token`]).
     pub token: Option<String>,
+    /// Host names a `POST` may name besides IP addresses and localhost
+    /// (`serve --allowed-host`; [`guard`]).
+    pub allowed_hosts: AllowedHosts,
     /// Poll interval of the server-sent event streams.
     pub events_interval: Duration,
+    /// Event streams open at once, per sweep and per client address.
+    pub stream_limits: StreamLimits,
     /// Time allowed for a request's headers (slow clients are cut off).
     pub header_read_timeout: Duration,
+    /// Time allowed for a request's body (408 beyond).
+    pub body_read_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -69,8 +83,11 @@ impl Default for ServerConfig {
             retry: RetryPolicy::DEFAULT,
             limits: Limits::DEFAULT,
             token: None,
+            allowed_hosts: AllowedHosts::default(),
             events_interval: Duration::from_millis(500),
+            stream_limits: StreamLimits::DEFAULT,
             header_read_timeout: http::HEADER_READ_TIMEOUT,
+            body_read_timeout: http::BODY_READ_TIMEOUT,
         }
     }
 }
@@ -85,9 +102,29 @@ pub struct RunningServer {
     pool: Option<WorkerPool>,
 }
 
+/// Why `token` cannot be a bearer token, if it cannot: it must be 1 to 4096
+/// printable ASCII characters without spaces (a client sends it in a header,
+/// where anything else is lost or refused).
+pub fn check_token(token: &str) -> Result<(), String> {
+    if token.is_empty() || token.len() > 4096 {
+        return Err("the token must have 1 to 4096 characters".to_string());
+    }
+    match token.chars().find(|c| !c.is_ascii_graphic()) {
+        Some(c) => Err(format!(
+            "the token must be printable ASCII without spaces; it holds {c:?}"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Opens the store (running the migrations), starts the embedded workers and
-/// serves the API on `listener`.
+/// serves the API on `listener`. A token [`check_token`] refuses stops it (an
+/// empty one is none).
 pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> anyhow::Result<RunningServer> {
+    let token = config.token.clone().filter(|t| !t.is_empty());
+    if let Some(token) = &token {
+        check_token(token).map_err(|e| anyhow::anyhow!("KNOTSWEEP_TOKEN: {e}"))?;
+    }
     let addr = listener.local_addr()?;
     let store = open_store(
         &config.database_url,
@@ -114,11 +151,18 @@ pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> a
     );
     let (shutdown, shutdown_rx) = watch::channel(false);
     let reaper = spawn_reaper(dyn_store.clone(), config.lease, shutdown_rx.clone());
+    let feeds = events::Feeds::new(
+        core.clone(),
+        config.events_interval,
+        shutdown_rx.clone(),
+        config.stream_limits,
+    );
     let app = api::App {
         core,
-        token: config.token.clone().filter(|t| !t.is_empty()),
-        shutdown: shutdown_rx.clone(),
-        events_interval: config.events_interval,
+        token,
+        allowed_hosts: config.allowed_hosts.clone(),
+        feeds,
+        body_read_timeout: config.body_read_timeout,
     };
     let router = api::router(app);
     let rx = shutdown_rx;

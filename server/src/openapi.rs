@@ -1,5 +1,5 @@
-//! Schemas the derive macros cannot produce: `CaseParams` lives in the solver
-//! crate (no utoipa there), so its schema is generated from its serialisation
+//! Schemas the derive macros cannot produce: `CaseParams` and `FieldError`
+//! live in the solver crate (no utoipa there). `CaseParams`'s schema is generated from its serialisation
 //! (every field, its JSON type and the paper's default) plus the table
 //! `solver::case::PARAMETERS`: each field's description, its words and its
 //! bounds where they are fixed numbers (`CaseParams::validate` checks the
@@ -9,7 +9,7 @@ use knotsweep_worker::store::SnapshotChoice;
 use serde_json::Value;
 use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
 use utoipa::openapi::extensions::Extensions;
-use utoipa::openapi::schema::{ObjectBuilder, Schema, SchemaType, Type};
+use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
 
 fn param_schema(name: &str, default: &Value) -> Schema {
@@ -101,6 +101,33 @@ pub fn snapshot_choice() -> Schema {
         ))
         .enum_values(Some(words))
         .default(Some(Value::from(SnapshotChoice::default().as_str())))
+        .into()
+}
+
+/// The `FieldError` component (`solver::case::FieldError`).
+pub fn field_error_schema() -> Schema {
+    let text = |description: &str| {
+        ObjectBuilder::new()
+            .schema_type(SchemaType::Type(Type::String))
+            .description(Some(description))
+    };
+    ObjectBuilder::new()
+        .description(Some("A field and why its value was refused."))
+        .property(
+            "field",
+            text("Where: `base.h`, `grid.n[2]`, `grid`, `preset`, `name`, `body`, a header's name, ..."),
+        )
+        .required("field")
+        .property("reason", text("Why, in the words of the parameter table."))
+        .required("reason")
+        .into()
+}
+
+/// A list of `FieldError`s.
+pub fn field_errors() -> Schema {
+    ArrayBuilder::new()
+        .items(Ref::from_schema_name("FieldError"))
+        .build()
         .into()
 }
 

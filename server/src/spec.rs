@@ -6,7 +6,9 @@ use knotsweep_worker::store::SnapshotChoice;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use solver::case::CaseParams;
-use std::collections::BTreeMap;
+pub use solver::case::FieldError;
+use std::collections::hash_map::Entry;
+use std::collections::{BTreeMap, HashMap};
 use utoipa::ToSchema;
 
 /// The limits of a submission ([`Limits::DEFAULT`] unless `serve` is told
@@ -80,23 +82,6 @@ pub struct SweepSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(schema_with = crate::openapi::snapshot_choice)]
     pub snapshots: Option<SnapshotChoice>,
-}
-
-/// A field and why its value was refused.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
-pub struct FieldError {
-    /// Where: `base.h`, `grid.n[2]`, `grid`, `preset`, `name`, `body`, ...
-    pub field: String,
-    pub reason: String,
-}
-
-impl FieldError {
-    pub fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
-        Self {
-            field: field.into(),
-            reason: reason.into(),
-        }
-    }
 }
 
 /// A named sweep reproducing one of the paper's phase diagrams.
@@ -334,6 +319,15 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     }
     let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
     let axes = check_grid(grid, &names, &mut errors);
+    for (axis, _) in &axes {
+        if spec.base.as_ref().is_some_and(|given| given.contains_key(axis)) {
+            let reason = match &preset {
+                Some(p) => format!("the preset {} varies {axis}: leave it out of base", p.name),
+                None => format!("{axis} is also a grid axis: give it in base or in grid, not both"),
+            };
+            errors.push(FieldError::new(format!("base.{axis}"), reason));
+        }
+    }
     if axes.iter().any(|(a, _)| a == MATERIAL_AXIS) {
         for (name, _) in axis_values(MATERIAL_AXIS, &Value::from(solver::case::MATERIALS[0].name)) {
             if base.contains_key(&name) || axes.iter().any(|(a, _)| *a == name) {
@@ -363,6 +357,9 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
         return Err(errors);
     }
     let cases = cartesian(&base, &axes, count, &mut errors);
+    if errors.is_empty() {
+        same_cases(&cases, &axes, &mut errors);
+    }
     let twins = if certify {
         refined_twins(&cases, &mut errors)
     } else {
@@ -429,7 +426,8 @@ fn check_header(spec: &SweepSpec, limits: &Limits, errors: &mut Vec<FieldError>)
 }
 
 /// The grid's axes with their values, each a known parameter with at least
-/// one value, no duplicates and values of the parameter's type.
+/// one value, values of the parameter's type (two values that make one case
+/// are [`same_cases`]'s to find).
 fn check_grid(
     grid: Option<&BTreeMap<String, Vec<Value>>>,
     names: &[String],
@@ -465,12 +463,6 @@ fn check_grid(
             continue;
         }
         for (i, v) in values.iter().enumerate() {
-            if values[..i].contains(v) {
-                errors.push(FieldError::new(
-                    format!("grid.{axis}[{i}]"),
-                    format!("duplicate value {v}"),
-                ));
-            }
             if let (KNOT_AXIS, Value::Object(knot)) = (axis.as_str(), v) {
                 let at = format!("grid.{axis}[{i}]");
                 for name in knot.keys().filter(|k| !KNOT_FIELDS.contains(&k.as_str())) {
@@ -487,6 +479,57 @@ fn check_grid(
         axes.push((axis.clone(), values.clone()));
     }
     axes
+}
+
+/// Points of the grid that are one case (one case key: equal values written
+/// apart, as `1` and `1.0` or `0` and `-0.0`, a default spelt out, a null
+/// given for an absent field): each later point named, with the earlier.
+fn same_cases(cases: &[GridCase], axes: &[(String, Vec<Value>)], errors: &mut Vec<FieldError>) {
+    let mut first: HashMap<String, usize> = HashMap::with_capacity(cases.len());
+    for (position, case) in cases.iter().enumerate() {
+        let earlier = match first.entry(knotsweep_worker::case_key(&case.params)) {
+            Entry::Vacant(v) => {
+                v.insert(position);
+                continue;
+            }
+            Entry::Occupied(o) => *o.get(),
+        };
+        let (a, b) = (grid_index(earlier, axes), grid_index(position, axes));
+        let at = |k: usize, index: &[usize]| format!("grid.{}[{}]", axes[k].0, index[k]);
+        let differ: Vec<usize> = (0..axes.len()).filter(|&k| a[k] != b[k]).collect();
+        let field = at(differ[0], &b);
+        if errors.iter().any(|e| e.field == field) {
+            continue;
+        }
+        let others = |index: &[usize]| {
+            differ[1..]
+                .iter()
+                .map(|&k| at(k, index))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let reason = if differ.len() == 1 {
+            format!("the same case as {}", at(differ[0], &a))
+        } else {
+            format!(
+                "with {}, the same case as {} with {}",
+                others(&b),
+                at(differ[0], &a),
+                others(&a)
+            )
+        };
+        errors.push(FieldError::new(field, reason));
+    }
+}
+
+/// Each axis's value index at `position` of the grid (last axis fastest).
+fn grid_index(mut position: usize, axes: &[(String, Vec<Value>)]) -> Vec<usize> {
+    let mut index = vec![0; axes.len()];
+    for (k, (_, values)) in axes.iter().enumerate().rev() {
+        index[k] = position % values.len();
+        position /= values.len();
+    }
+    index
 }
 
 /// The `count` cases of the cartesian product of `axes` over `base`, last

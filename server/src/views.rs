@@ -25,7 +25,7 @@ pub enum SweepStatus {
     Queued,
     /// Some cases are running or queued.
     Running,
-    /// Paused with cases left (running ones finish).
+    /// Paused with cases left (running ones go back to the queue).
     Paused,
     /// Every case has a result, failed or was cancelled.
     Done,

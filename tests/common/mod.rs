@@ -186,6 +186,31 @@ pub fn with(base: Value, changes: Value) -> Value {
     base
 }
 
+/// `knotsweep serve` on a free loopback port, without workers, over a
+/// SQLite file in `dir`.
+pub fn serve_command(dir: &std::path::Path) -> std::process::Command {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_knotsweep"));
+    command
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--workers",
+            "0",
+            "--database-url",
+        ])
+        .arg(format!("sqlite://{}", dir.join("k.db").display()));
+    command
+}
+
+/// A base without the field `key` (which a grid then varies: a parameter is
+/// given in one place).
+pub fn without(base: Value, key: &str) -> Value {
+    let mut base = base;
+    base.as_object_mut().expect("object").remove(key);
+    base
+}
+
 /// Sends a signal to a child process.
 pub fn signal(child: &std::process::Child, signal: i32) {
     // SAFETY: kill(2) on the pid of a child we spawned and have not reaped.

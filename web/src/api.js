@@ -17,6 +17,8 @@ export class ApiError extends Error {
 
 export async function api(method, path, body) {
   const headers = {};
+  // The server takes every POST as JSON only (415 otherwise), a bodiless one too.
+  if (method === "POST") body ??= {};
   if (body !== undefined) headers["Content-Type"] = "application/json";
   const t = token.get();
   if (t) headers["Authorization"] = "Bearer " + t;

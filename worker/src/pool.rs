@@ -100,11 +100,19 @@ pub struct PoolHandle {
     pub metrics: Arc<WorkerMetrics>,
     last_poll: Arc<Vec<AtomicI64>>,
     config: Arc<PoolConfig>,
+    nudge: Arc<watch::Sender<u64>>,
 }
 
 impl PoolHandle {
     pub fn workers(&self) -> usize {
         self.config.workers
+    }
+
+    /// Makes every running slot heartbeat now: a pause or a cancellation
+    /// reaches this pool's cases at once (other processes' workers see it at
+    /// their next heartbeat).
+    pub fn nudge(&self) {
+        self.nudge.send_modify(|n| *n += 1);
     }
 
     /// Slots that have neither polled the queue nor heartbeated for longer
@@ -138,6 +146,8 @@ struct Ctx {
     metrics: Arc<WorkerMetrics>,
     last_poll: Arc<Vec<AtomicI64>>,
     rayon: Arc<rayon::ThreadPool>,
+    /// Bumped by [`PoolHandle::nudge`]: heartbeat now.
+    nudge: Arc<watch::Sender<u64>>,
 }
 
 impl WorkerPool {
@@ -153,6 +163,7 @@ impl WorkerPool {
             .thread_name(|i| format!("knotsweep-solver-{i}"))
             .build()
             .expect("rayon pool starts");
+        let nudge = Arc::new(watch::channel(0).0);
         let ctx = Arc::new(Ctx {
             reserved: AtomicU64::new(0),
             store,
@@ -160,6 +171,7 @@ impl WorkerPool {
             metrics: metrics.clone(),
             last_poll: last_poll.clone(),
             rayon: Arc::new(rayon),
+            nudge: nudge.clone(),
         });
         let (shutdown, rx) = watch::channel(false);
         let tasks = (0..config.workers)
@@ -173,6 +185,7 @@ impl WorkerPool {
                 metrics,
                 last_poll,
                 config,
+                nudge,
             },
         }
     }
@@ -360,8 +373,9 @@ enum Outcome {
     ShutDown,
 }
 
-/// Follows a run to its end: heartbeats (storing progress, stopping the
-/// solver when cancelled or when the lease is lost) and shutdown.
+/// Follows a run to its end: heartbeats every [`PoolConfig::heartbeat`] and
+/// when nudged (storing progress, stopping the solver when cancelled or
+/// paused, or when the lease is lost) and shutdown.
 async fn supervise(
     ctx: &Ctx,
     slot: usize,
@@ -373,6 +387,8 @@ async fn supervise(
     let mut ticker = tokio::time::interval_at(tokio::time::Instant::now() + period, period);
     ticker.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut state = LeaseState::Held;
+    // The sender lives in `ctx`: `changed` never fails while this runs.
+    let mut nudges = ctx.nudge.subscribe();
     loop {
         tokio::select! {
             report = run.finished() => {
@@ -384,6 +400,9 @@ async fn supervise(
             }
             _ = ticker.tick() => {
                 ctx.last_poll[slot].store(now_ms(), Ordering::Relaxed);
+                state = heartbeat(ctx, lease, run, state).await;
+            }
+            Ok(()) = nudges.changed() => {
                 state = heartbeat(ctx, lease, run, state).await;
             }
             _ = shutdown.changed(), if state != LeaseState::Lost => {
@@ -403,7 +422,7 @@ async fn heartbeat(ctx: &Ctx, lease: &Lease, run: &SolverRun, state: LeaseState)
         .await
     {
         Ok(Heartbeat::Held { cancel: true }) if state == LeaseState::Held => {
-            tracing::info!("cancel requested: stopping the solver");
+            tracing::info!("cancel or pause requested: stopping the solver");
             run.stop();
             LeaseState::Cancelling
         }

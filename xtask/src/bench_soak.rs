@@ -224,7 +224,7 @@ async fn client(
             });
             if (c + subs.len()) % 5 == 0 {
                 let url = format!("{base}/api/sweeps/{id}/cancel");
-                request(&mut lat, "cancel", http.post(url)).await?;
+                request(&mut lat, "cancel", http.post(url).json(&serde_json::json!({}))).await?;
                 subs.last_mut().expect("just pushed").cancelled = true;
             }
             let url = format!("{base}/api/sweeps/{id}/phase-diagram");

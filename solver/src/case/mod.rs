@@ -93,14 +93,26 @@ impl ValidCase {
 /// The knots built so far in one validation pass, by spec, with the
 /// builder's refusal if it refused ([`CaseParams::validate_in`]).
 #[derive(Debug, Default)]
-pub struct BuildChecks(Vec<(Knot, Result<f64, ParamError>)>);
+pub struct BuildChecks(Vec<(Knot, Result<f64, FieldError>)>);
 
-/// A parameter outside its documented range.
+/// A field and why its value was refused: a parameter of the wrong type or
+/// outside its range, a knot that cannot be built. The service names its
+/// fields with it too (`base.h`, `grid.n[2]`, `preset`, `body`, ...).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, thiserror::Error)]
 #[error("{field}: {reason}")]
-pub struct ParamError {
+pub struct FieldError {
+    /// Where: a parameter's name, or the service's path to it.
     pub field: String,
     pub reason: String,
+}
+
+impl FieldError {
+    pub fn new(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
 }
 
 impl CaseParams {
@@ -116,14 +128,14 @@ impl CaseParams {
     /// assert_eq!(errors[0].field, "mu");
     /// assert_eq!(errors[0].reason, "must be in [0, 2], got -0.5");
     /// ```
-    pub fn validate(&self) -> Result<(), Vec<ParamError>> {
+    pub fn validate(&self) -> Result<(), Vec<FieldError>> {
         self.validate_in(&mut BuildChecks::default())
     }
 
     /// [`CaseParams::validate`], building each distinct knot once per `checks`:
     /// a grid over parameters the start shape does not read (`mu`, speeds,
     /// ...) builds one knot, not one per case.
-    pub fn validate_in(&self, checks: &mut BuildChecks) -> Result<(), Vec<ParamError>> {
+    pub fn validate_in(&self, checks: &mut BuildChecks) -> Result<(), Vec<FieldError>> {
         let errors = self.range_errors();
         if !errors.is_empty() {
             return Err(errors);
@@ -148,7 +160,7 @@ impl CaseParams {
 
     /// The checks of [`CaseParams::validate`] and the start shape in one
     /// pass: the case to run.
-    pub fn validated(&self) -> Result<ValidCase, Vec<ParamError>> {
+    pub fn validated(&self) -> Result<ValidCase, Vec<FieldError>> {
         let errors = self.range_errors();
         if !errors.is_empty() {
             return Err(errors);
@@ -175,7 +187,7 @@ impl CaseParams {
     }
 
     /// Why the loading program cannot run from `start`, if it cannot.
-    fn loading_error(&self, start: &StartShape) -> Option<ParamError> {
+    fn loading_error(&self, start: &StartShape) -> Option<FieldError> {
         let points = start.points();
         let span = points[points.len() - 1] - points[0];
         let along_x = span.y.abs().max(span.z.abs()) <= 1e-9 * span.norm();
@@ -185,7 +197,7 @@ impl CaseParams {
     /// Why the loading program cannot run from a knot starting at l_k bar
     /// `start` ([`loading::check`]), or with soft stages on a knot not
     /// pulled along x (its springs act along x), if it cannot.
-    fn program_error(&self, start: f64, along_x: bool) -> Option<ParamError> {
+    fn program_error(&self, start: f64, along_x: bool) -> Option<FieldError> {
         let program = self.loading.as_deref()?;
         let soft = program.iter().any(|s| matches!(s, LoadStage::Soft(_)));
         let reason = if soft && !along_x {
@@ -195,7 +207,7 @@ impl CaseParams {
         } else {
             loading::check(program, start, self.length / self.h)
         };
-        reason.err().map(|reason| ParamError {
+        reason.err().map(|reason| FieldError {
             field: "loading".to_string(),
             reason,
         })
@@ -207,7 +219,7 @@ impl CaseParams {
     }
 
     /// Every range of [`PARAMETERS`] that does not hold, in the table's order.
-    pub fn range_errors(&self) -> Vec<ParamError> {
+    pub fn range_errors(&self) -> Vec<FieldError> {
         PARAMETERS.iter().filter_map(|p| p.check(self)).collect()
     }
 

@@ -3,7 +3,7 @@
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
     Candidates, ContactSolve, FrictionLaw, Geometry, KnotKind, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR,
-    ParamError, Protocol,
+    FieldError, Protocol,
 };
 use crate::knot::{
     self, BraidSpec, BraidWord, Family, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
@@ -598,7 +598,7 @@ pub const PARAMETERS: &[Parameter] = &[
 
 impl CaseParams {
     /// A knot builder's refusal as the error of the parameter to change.
-    fn knot_error(&self, e: KnotError) -> ParamError {
+    fn knot_error(&self, e: KnotError) -> FieldError {
         let braid_or_h = if self.braid_length.is_some() {
             "braid_length"
         } else {
@@ -625,7 +625,7 @@ impl CaseParams {
             | KnotError::Infeasible { .. } => braid_or_h,
             KnotError::EndToEndOutOfRange { .. } => "end_to_end",
         };
-        let mut reason = format!("the knot cannot be built: {e}");
+        let mut reason = format!("the knot with n = {} passes cannot be built: {e}", self.n);
         if let KnotError::TooFewNodes { min, .. } = e
             && min > MAX_NODES
         {
@@ -633,7 +633,7 @@ impl CaseParams {
                 " (more than the {MAX_NODES} allowed: use a larger h or a shorter length)"
             ));
         }
-        ParamError {
+        FieldError {
             field: field.to_string(),
             reason,
         }
@@ -643,13 +643,13 @@ impl CaseParams {
     /// ([`knot::checked_start`]), or the knot builder's ([`knot::build`]
     /// itself, so that a case accepted by [`CaseParams::validate`] can always
     /// start); a failure names the parameter to change.
-    pub(super) fn start_shape(&self) -> Result<StartShape, ParamError> {
+    pub(super) fn start_shape(&self) -> Result<StartShape, FieldError> {
         let knot = self.knot()?;
         match &self.initial_shape {
             Some(points) => {
                 let rod = (self.length, self.node_count(), self.h);
                 knot::checked_start(points, rod, &knot.name(), &knot.alexander()).map_err(|reason| {
-                    ParamError {
+                    FieldError {
                         field: "initial_shape".to_string(),
                         reason,
                     }
@@ -671,8 +671,8 @@ impl CaseParams {
 
     /// The knot of the catalog this case ties; a parameter that does not
     /// belong to the chosen knot, or a refused braid word, is named.
-    pub fn knot(&self) -> Result<Knot, ParamError> {
-        let refuse = |field: &str, reason: String| ParamError {
+    pub fn knot(&self) -> Result<Knot, FieldError> {
+        let refuse = |field: &str, reason: String| FieldError {
             field: field.to_string(),
             reason,
         };

@@ -1,7 +1,7 @@
 //! The form of the parameter table ([`super::PARAMETERS`]): each entry's
 //! range as data, the range check [`CaseParams::validate`] runs, and the texts
 //! the CLI, the OpenAPI schema and docs/API.md show.
-use super::{CaseParams, ParamError};
+use super::{CaseParams, FieldError};
 
 /// One case parameter, documented once: the CLI flags (`--` and the name with
 /// dashes), the OpenAPI schema, the web form's help and docs/API.md's table
@@ -140,6 +140,28 @@ impl Parameter {
         }
     }
 
+    /// The values it takes, as a refusal names them: `a whole number in
+    /// 1..=8`, `a number in [0, 2]`, `a number in [L/16000, L/50) m`, `null
+    /// or ...` for a parameter that may be null.
+    pub fn expected(&self) -> String {
+        let unit = self.unit_suffix();
+        let values = match self.range {
+            Range::Integers(lo, hi) => format!("a whole number in {lo}..={hi}"),
+            Range::Interval(lo, hi) => format!("a number in {}{unit}", interval_text(lo, hi, number)),
+            Range::LengthOver(lo, hi) => format!("a number in {}{unit}", interval_text(lo, hi, length_over)),
+            Range::Components(lo, hi) => format!(
+                "three numbers [x, y, z], each in [{}, {}]{unit}",
+                number(lo),
+                number(hi)
+            ),
+            _ => return self.range_text(),
+        };
+        match self.null {
+            Some(_) => format!("null or {values}"),
+            None => values,
+        }
+    }
+
     /// The whole entry in one text, for the CLI's help and the OpenAPI
     /// schema's description: doc, range with unit, null, default and the
     /// paper's value.
@@ -156,11 +178,11 @@ impl Parameter {
     }
 
     /// Why `params` break this parameter's range, if they do.
-    pub(super) fn check(&self, params: &CaseParams) -> Option<ParamError> {
+    pub(super) fn check(&self, params: &CaseParams) -> Option<FieldError> {
         let unit = self.unit_suffix();
         let reason = match ((self.value)(params)?, self.range) {
             (Value::Integer(v), Range::Integers(lo, hi)) => {
-                (!(lo..=hi).contains(&v)).then(|| format!("must be an integer in {lo}..={hi}, got {v}"))
+                (!(lo..=hi).contains(&v)).then(|| format!("must be a whole number in {lo}..={hi}, got {v}"))
             }
             (Value::Number(v), Range::Interval(lo, hi)) => (!within(v, lo, hi))
                 .then(|| format!("must be in {}{unit}, got {v}", interval_text(lo, hi, number))),
@@ -188,7 +210,7 @@ impl Parameter {
             }
             (value, range) => unreachable!("{}: a {value:?} cannot be checked against {range:?}", self.name),
         }?;
-        Some(ParamError {
+        Some(FieldError {
             field: self.name.to_string(),
             reason,
         })

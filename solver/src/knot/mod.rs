@@ -125,33 +125,54 @@ impl StartShape {
 pub enum KnotError {
     #[error("number of passes n = {0} must be in 1..=8")]
     Passes(u32),
-    #[error("{name} = {value} must be finite and positive")]
+    #[error("{name} = {} must be finite and positive", Length(*.value))]
     InvalidParameter { name: &'static str, value: f64 },
-    #[error("radius h = {radius} m is too large: the rod length requires h < L/50 = {max} m")]
+    #[error(
+        "radius h = {} m is too large: the rod length requires h < L/50 = {} m",
+        Length(*.radius),
+        Length(*.max)
+    )]
     RadiusTooLarge { radius: f64, max: f64 },
     #[error(
         "{nodes} nodes cannot resolve the knot (edges at most 4h and a quarter of a braid pass): need {min}"
     )]
     TooFewNodes { nodes: usize, min: usize },
     #[error(
-        "braid strand length {pass_length} m is too short for 2n+1 half twists of radius h: need {min} m"
+        "braid strand length {} m is too short for 2n+1 half twists of radius h: need {} m",
+        Length(*.pass_length),
+        Length(*.min)
     )]
     BraidTooShort { pass_length: f64, min: f64 },
-    #[error("tails of {tail_length} m (L - 2 braid - loop, halved) are too short: need {min} m")]
+    #[error(
+        "tails of {} m (L - 2 braid - loop, halved) are too short: need {} m",
+        Length(*.tail_length),
+        Length(*.min)
+    )]
     TailsTooShort { tail_length: f64, min: f64 },
     #[error(
-        "no valid shape with braid passes of {pass_length} m, a loop of {loop_length} m and tails of \
-         {tail_length} m: the loop cannot close around the braid, or the tails cannot reach the axis, \
-         with bend radii of at least 3 helix radii"
+        "no valid shape with braid passes of {} m, a loop of {} m and tails of {} m: the loop cannot close \
+         around the braid, or the tails cannot reach the axis, with bend radii of at least 3 helix radii",
+        Length(*.pass_length),
+        Length(*.loop_length),
+        Length(*.tail_length)
     )]
     Infeasible {
         pass_length: f64,
         loop_length: f64,
         tail_length: f64,
     },
-    #[error("end-to-end distance {clamp_span} m is outside the feasible range [{min}, {max}] m")]
+    #[error(
+        "end-to-end distance {} m is outside the feasible range [{}, {}] m",
+        Length(*.clamp_span),
+        Length(*.min),
+        Length(*.max)
+    )]
     EndToEndOutOfRange { clamp_span: f64, min: f64, max: f64 },
-    #[error("non-neighbouring segments are {distance} m apart, closer than 2h = {required} m")]
+    #[error(
+        "non-neighbouring segments are {} m apart, closer than 2h = {} m",
+        Length(*.distance),
+        Length(*.required)
+    )]
     Clearance { distance: f64, required: f64 },
     #[error("topology check failed: {0}")]
     Topology(#[from] TopologyError),
@@ -160,9 +181,34 @@ pub enum KnotError {
     #[error("{0}")]
     Braid(#[from] BraidError),
     #[error(
-        "the knot needs a rod of at least {needed:.4} m (its return paths and tails reaching past them), got L = {length} m"
+        "the knot needs a rod of at least {} m (its return paths and tails reaching past them), got L = {} m",
+        Length(*.needed),
+        Length(*.length)
     )]
     RodTooShort { needed: f64, length: f64 },
+}
+
+/// A length (or another measure) in a message: four significant digits,
+/// `0.4812`, `3.200e-3`.
+struct Length(f64);
+
+impl std::fmt::Display for Length {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let x = self.0;
+        let exponent = if x == 0.0 || !x.is_finite() {
+            0
+        } else {
+            x.abs().log10().floor() as i32
+        };
+        if !(-2..4).contains(&exponent) {
+            return write!(f, "{x:.3e}");
+        }
+        let text = format!("{x:.*}", (3 - exponent).max(0) as usize);
+        match text.contains('.') {
+            true => f.write_str(text.trim_end_matches('0').trim_end_matches('.')),
+            false => f.write_str(&text),
+        }
+    }
 }
 
 /// Fails unless the long knot `points` has the Alexander polynomial `expected`.
@@ -175,4 +221,41 @@ fn check_knot(points: &[Vector3<f64>], expected: &Alexander) -> Result<(), KnotE
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lengths in messages: four significant digits, trailing zeros dropped.
+    #[test]
+    fn lengths_read_to_four_digits() {
+        let written: Vec<String> = [
+            3.2e-3,
+            0.003199999999999999,
+            0.48123456,
+            0.02,
+            1.0,
+            12.345678,
+            1e5,
+            0.0,
+        ]
+        .into_iter()
+        .map(|x| Length(x).to_string())
+        .collect();
+        assert_eq!(
+            written,
+            [
+                "3.200e-3", "3.200e-3", "0.4812", "0.02", "1", "12.35", "1.000e5", "0"
+            ]
+        );
+        let e = KnotError::Clearance {
+            distance: 0.0031999999999999997,
+            required: 3.2e-3,
+        };
+        assert_eq!(
+            e.to_string(),
+            "non-neighbouring segments are 3.200e-3 m apart, closer than 2h = 3.200e-3 m"
+        );
+    }
 }

@@ -37,7 +37,7 @@ pub use report::{
     Stats, Status,
 };
 
-use crate::case::{CaseParams, ParamError, ValidCase};
+use crate::case::{CaseParams, FieldError, ValidCase};
 use nalgebra::Vector3;
 
 /// A case's cost in node-steps, to the order of magnitude: a pull over the
@@ -120,7 +120,7 @@ pub fn run_observed(
 }
 
 /// Parameter errors as one line.
-fn reasons(errors: &[ParamError]) -> String {
+fn reasons(errors: &[FieldError]) -> String {
     errors
         .iter()
         .map(|e| e.to_string())

@@ -99,7 +99,8 @@ impl RetryPolicy {
 pub enum SweepState {
     /// Its cases are handed out to workers.
     Active,
-    /// Its queued cases are not handed out; running ones finish.
+    /// Its queued cases are not handed out; running ones no active sweep
+    /// wants are handed back to the queue at their next heartbeat.
     Paused,
     /// Terminal: queued cases no other sweep wants are cancelled, running ones
     /// stop at their next heartbeat.
@@ -390,7 +391,7 @@ pub struct Claim {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Heartbeat {
     /// Still ours (lease extended); `cancel`: every sweep that wants the case
-    /// was cancelled, stop computing.
+    /// was cancelled or paused, stop computing (`finish_cancelled`).
     Held { cancel: bool },
     /// Someone else holds the case now (or it is no longer running).
     Lost,
@@ -438,8 +439,10 @@ pub trait Store: Send + Sync + 'static {
     async fn sweep_status_counts(&self, ids: RangeInclusive<i64>) -> StoreResult<Vec<(i64, String, i64)>>;
     /// The sweep's cases in grid order, with result summaries.
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>>;
-    /// Pause, resume or cancel. `NotFound` for an unknown sweep, `Conflict`
-    /// for pausing or resuming a cancelled one.
+    /// Pause (its running cases no active sweep wants are handed back to the
+    /// queue at their next heartbeat), resume or cancel. `NotFound` for an
+    /// unknown sweep, `Conflict` for pausing or resuming a cancelled one;
+    /// cancelling a finished sweep (no case queued or running) changes nothing.
     async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord>;
 
     // --- cases (the API) ---
@@ -480,8 +483,9 @@ pub trait Store: Send + Sync + 'static {
     async fn fail_attempt(&self, lease: &Lease, reason: &str) -> StoreResult<FailOutcome>;
     /// Gives the case back (shutdown): queued at once, the attempt not counted.
     async fn release(&self, lease: &Lease) -> StoreResult<bool>;
-    /// The solver stopped on a cancel request: `cancelled`, or queued again if a
-    /// sweep asked for the case in the meantime.
+    /// The solver stopped on a cancel request: `cancelled`, or queued again,
+    /// the attempt not counted, if the request was a pause's or a sweep asked
+    /// for the case in the meantime.
     async fn finish_cancelled(&self, lease: &Lease) -> StoreResult<bool>;
 
     // --- metrics ---

@@ -53,6 +53,10 @@ pub(crate) const CLAIMABLE: &str = "EXISTS (SELECT 1 FROM sweep_cases sc JOIN sw
 pub(crate) const WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JOIN sweeps ws ON ws.id = w.sweep_id \
     WHERE w.case_id = c.id AND ws.state != 'cancelled')";
 
+/// SQL condition: an active sweep (not paused, not cancelled) wants case `c`.
+pub(crate) const ACTIVELY_WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JOIN sweeps ws ON ws.id = w.sweep_id \
+    WHERE w.case_id = c.id AND ws.state = 'active')";
+
 pub(crate) fn json<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> StoreResult<T> {
     serde_json::from_str(text).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
 }
@@ -121,7 +125,8 @@ pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
             .text_or_null("progress_detail")?
             .map(|t| json(&t, "progress"))
             .transpose()?,
-        cancel_requested: r.int("cancel_requested")? != 0,
+        // 2 is a paused sweep's request to hand the case back, not a cancellation.
+        cancel_requested: r.int("cancel_requested")? == 1,
         last_error: r.text_or_null("last_error")?,
         created_at: r.int("created_at")?,
         started_at: r.int_or_null("started_at")?,

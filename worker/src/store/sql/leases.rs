@@ -59,7 +59,8 @@ impl Expired {
             // An expired lease always has an owner; an empty name only shortens the log line.
             owner: r.text_or_null("lease_owner")?.unwrap_or_default(),
             fence: r.int("fence")?,
-            cancel_requested: r.int("cancel_requested")? != 0,
+            // 2 (its sweeps paused) is no cancellation: the lease ends as any other.
+            cancel_requested: r.int("cancel_requested")? == 1,
         })
     }
 }
@@ -336,7 +337,7 @@ impl<B: Backend> SqlStore<B> {
             format!("cancelled while running on {}", lease.owner)
         } else {
             B::announce(&mut tx).await?;
-            "stopped for a cancellation that was withdrawn; queued again".to_string()
+            "stopped for a pause, or a cancellation since withdrawn; queued again".to_string()
         };
         Self::log(&mut tx, lease.case_id, "info", &message).await?;
         tx.commit().await?;

@@ -111,6 +111,8 @@ impl<B: Backend> SqlStore<B> {
             }
             (SweepAction::Pause, _) => SweepState::Paused,
             (SweepAction::Resume, _) => SweepState::Active,
+            // A finished sweep (no case queued or running) stays as it is.
+            (SweepAction::Cancel, state) if Self::open_cases(&mut tx, id).await? == 0 => state,
             (SweepAction::Cancel, _) => SweepState::Cancelled,
         };
         if target != sweep.state {
@@ -121,14 +123,63 @@ impl<B: Backend> SqlStore<B> {
                 .execute(&mut *tx)
                 .await?;
             match target {
-                SweepState::Active => B::announce(&mut tx).await?,
+                SweepState::Active => {
+                    Self::resume_cases(&mut tx, id).await?;
+                    B::announce(&mut tx).await?
+                }
                 SweepState::Cancelled => Self::cancel_cases(&mut tx, id).await?,
-                SweepState::Paused => {}
+                SweepState::Paused => Self::pause_cases(&mut tx, id).await?,
             }
         }
         let record = Self::sweep(&mut tx, id, "").await?.ok_or(StoreError::NotFound)?;
         tx.commit().await?;
         Ok(record)
+    }
+
+    /// The cases of sweep `id` queued or running (by the status words the
+    /// sweep's counts use).
+    async fn open_cases(conn: &mut AnyConnection, id: i64) -> StoreResult<i64> {
+        let row = sqlx::query(
+            "SELECT COUNT(*) AS n FROM sweep_cases sc JOIN cases c ON c.id = sc.case_id \
+             LEFT JOIN results r ON r.case_id = c.id \
+             WHERE sc.sweep_id = $1 AND COALESCE(r.outcome, c.status) IN ('queued', 'running')",
+        )
+        .bind(id)
+        .fetch_one(&mut *conn)
+        .await?;
+        row.int("n")
+    }
+
+    /// Hands the running cases of sweep `id` that no active sweep wants back to
+    /// the queue at their next heartbeat (`cancel_requested = 2`; the worker
+    /// stops and `end_cancelled` queues the case again, the attempt not
+    /// counted), so that a paused sweep computes nothing.
+    async fn pause_cases(conn: &mut AnyConnection, id: i64) -> StoreResult<()> {
+        let running = sqlx::query(&format!(
+            "UPDATE cases AS c SET cancel_requested = 2 \
+             WHERE c.status = 'running' AND c.cancel_requested = 0 \
+             AND c.id IN (SELECT case_id FROM sweep_cases WHERE sweep_id = $1) AND NOT {ACTIVELY_WANTED} RETURNING id"
+        ))
+        .bind(id)
+        .fetch_all(&mut *conn)
+        .await?;
+        for row in running {
+            let message = format!("sweep {id} paused; handed back to the queue at its next heartbeat");
+            Self::log(conn, row.int("id")?, "info", &message).await?;
+        }
+        Ok(())
+    }
+
+    /// Withdraws the pause's requests on the running cases of sweep `id`.
+    async fn resume_cases(conn: &mut AnyConnection, id: i64) -> StoreResult<()> {
+        sqlx::query(
+            "UPDATE cases SET cancel_requested = 0 WHERE status = 'running' AND cancel_requested = 2 \
+             AND id IN (SELECT case_id FROM sweep_cases WHERE sweep_id = $1)",
+        )
+        .bind(id)
+        .execute(&mut *conn)
+        .await?;
+        Ok(())
     }
 
     /// Cancels the cases of sweep `id` that no other sweep wants: queued ones

@@ -510,8 +510,9 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "",
         doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
-              points), no two non-neighbouring segments closer than 2h, and of the knot type of an n-pass \
-              overhand knot. Mind the request body limit (GET /api/limits).",
+              points), no two non-neighbouring segments closer than 2h by more than 1 % (strands pressed \
+              together, as in a relaxed snapshot a case wrote), and of the knot type of an n-pass overhand knot. \
+              Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
     Parameter {

@@ -441,6 +441,11 @@ pub trait Store: Send + Sync + 'static {
     /// Pause, resume or cancel. `NotFound` for an unknown sweep, `Conflict`
     /// for pausing or resuming a cancelled one.
     async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord>;
+    /// Puts measured points (JSON text) beside sweep `id`, replacing any
+    /// before; `NotFound` for an unknown sweep.
+    async fn set_measurements(&self, id: i64, points: &str) -> StoreResult<()>;
+    /// The measured points put beside sweep `id`, if any.
+    async fn measurements(&self, id: i64) -> StoreResult<Option<String>>;
 
     // --- cases (the API) ---
 

@@ -33,8 +33,8 @@ pub struct Args {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Also write the phase diagram as CSV, one row per point (the table of
-    /// `GET /api/sweeps/{id}/phase-diagram.csv`) [default path: the JSON's with `.csv`].
-    #[arg(long, value_name = "PATH", num_args = 0..=1, default_missing_value = "")]
+    /// `GET /api/sweeps/{id}/phase-diagram.csv`).
+    #[arg(long, value_name = "PATH")]
     csv: Option<PathBuf>,
     /// Write the figures into this directory, as SVG and PDF: the phase
     /// diagram (`phase`, with a varied parameter) and the curves of every
@@ -197,11 +197,6 @@ pub fn run(args: Args) -> Result<()> {
         std::fs::write(&out, serde_json::to_string_pretty(&diagram)?)
             .with_context(|| format!("writing {}", out.display()))?;
         if let Some(csv) = &args.csv {
-            let csv = if csv.as_os_str().is_empty() {
-                out.with_extension("csv")
-            } else {
-                csv.clone()
-            };
             let table = report::tables::phase_diagram_csv(&serde_json::to_value(&diagram)?);
             std::fs::write(&csv, table).with_context(|| format!("writing {}", csv.display()))?;
             println!("phase diagram table written to {}", csv.display());

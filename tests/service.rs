@@ -1525,7 +1525,7 @@ async fn measured_points_are_stored_beside_a_sweep_and_drawn() {
 }
 
 /// A fit recovers the mu that made its measurements: the tool's own
-/// inversions of two rods at a known mu, each given an error of 1 in l_k bar,
+/// inversions of two rods (h = 3.4 and 2.4 mm) at a known mu, each given an error of 1 in l_k bar,
 /// give back that mu inside the fit's interval, and the interval is no wider
 /// than those errors allow (at most 0.08).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -1533,16 +1533,17 @@ async fn a_fit_recovers_the_mu_that_made_its_points() {
     let (_dir, db) = temp_db();
     let server = start(config(&db, 2)).await;
     let (url, c) = (server.url(), client());
-    let base = with(tiny_base(), json!({"min_l_k_bar": 100.0}));
-    let truth = 0.2;
-    let radii = [5e-3, 5.5e-3];
+    // The paper's rod (the short rods of the other tests invert too erratically with mu to fit).
+    let base = json!({});
+    let truth = 0.3;
+    let radii = [3.4e-3, 2.4e-3];
     let made = submit_sweep(
         &c,
         &url,
         &json!({"base": with(base.clone(), json!({"mu": truth})), "grid": {"h": radii}}),
     )
     .await;
-    wait_sweep(&c, &url, made, Duration::from_secs(120), finished).await;
+    wait_sweep(&c, &url, made, Duration::from_secs(600), finished).await;
     let (_, pd) = get(&c, &format!("{url}/api/sweeps/{made}/phase-diagram")).await;
     let points: Vec<Value> = (pd["points"].as_array().unwrap().iter())
         .map(|p| {
@@ -1576,7 +1577,7 @@ async fn a_fit_recovers_the_mu_that_made_its_points() {
     let (status, fit) = post(
         &c,
         &fits,
-        &json!({"parameter": "mu", "range": [0.05, 0.4], "base": base, "points": points}),
+        &json!({"parameter": "mu", "range": [0.05, 0.8], "base": base, "points": points}),
     )
     .await;
     assert_eq!(status, StatusCode::ACCEPTED, "{fit:#}");
@@ -1588,7 +1589,7 @@ async fn a_fit_recovers_the_mu_that_made_its_points() {
         if fit["status"] != "running" {
             break fit;
         }
-        assert!(t.elapsed() < Duration::from_secs(600), "fit not done: {fit:#}");
+        assert!(t.elapsed() < Duration::from_secs(1200), "fit not done: {fit:#}");
         tokio::time::sleep(Duration::from_millis(500)).await;
     };
     assert_eq!(fit["status"], "done", "{fit:#}");

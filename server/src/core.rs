@@ -345,6 +345,7 @@ impl Core {
             integer_x,
             sets: groups
                 .iter()
+                .filter(|(_, marks)| !marks.is_empty())
                 .map(|(label, marks)| charts::PhaseSet {
                     label: label.clone(),
                     marks,

@@ -198,7 +198,7 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("writing {}", out.display()))?;
         if let Some(csv) = &args.csv {
             let table = report::tables::phase_diagram_csv(&serde_json::to_value(&diagram)?);
-            std::fs::write(&csv, table).with_context(|| format!("writing {}", csv.display()))?;
+            std::fs::write(csv, table).with_context(|| format!("writing {}", csv.display()))?;
             println!("phase diagram table written to {}", csv.display());
         }
         if let Some(dir) = &args.figures {

@@ -627,7 +627,8 @@ fn pair(simulated: &[Simulated]) -> Simulations {
         .map(|(k, s)| match s.l_k_bar {
             Some(l) => Ok((l, s.uncertainty.unwrap_or(0.0))),
             None => Err(format!(
-                "point {k} (case {}) has no inversion: {}",
+                "point {} (case {}) has no inversion: {}",
+                k + 1,
                 s.case_id,
                 s.reason.as_deref().unwrap_or("no result")
             )),

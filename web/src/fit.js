@@ -122,7 +122,7 @@ export async function fitPage(main, id) {
         title: `simulated ${LK} against ${name}; dotted: the fitted value`,
         x: axisLabel(f.parameter, props),
         y: `${LK} at inversion`,
-        curves: points.map((p, k) => ({ label: `point ${k + 1} (measured ${fmt(p.l_k_bar, 1)})`, colour: colour(k),
+        curves: points.map((p, k) => ({ label: `point ${k + 1} (measured ${fmt(p.l_k_bar, 1)})`, colour: colour(k), dots: true,
           points: sorted.filter((e) => e.points[k].l_k_bar !== null).map((e) => [e.value, e.points[k].l_k_bar]) })),
         guides: f.value === null ? [] : [f.value],
       });

@@ -37,7 +37,7 @@ function eventMarker(ctx, px, py, kind, colour) {
 
 /**
  * Overlaid curves. `curves`: [{label, colour, points: [[x, y]...], mark: x|null,
- * dash?, width?, direction?}]; `events`: [{x, y, kind: "inversion"|"flip_back", colour}],
+ * dash?, width?, direction?, dots?}] (dots: each point marked); `events`: [{x, y, kind: "inversion"|"flip_back", colour}],
  * markers on the curves. Returns {plot, setMarker(x)}: a solid vertical line at x (the case page's snapshot).
  */
 export function overlay(el, { title, x, y, curves, width, events = [], guides = [] }) {
@@ -60,7 +60,7 @@ export function overlay(el, { title, x, y, curves, width, events = [], guides = 
       { label: x, stroke: a.stroke, grid: { stroke: a.grid } },
       { label: y, stroke: a.stroke, grid: { stroke: a.grid } },
     ],
-    series: [{ label: x }, ...curves.map((c) => ({ label: c.label, stroke: c.colour, width: c.width || 1.5, dash: c.dash && c.dash.length ? c.dash : undefined, spanGaps: true, points: { show: false } }))],
+    series: [{ label: x }, ...curves.map((c) => ({ label: c.label, stroke: c.colour, width: c.width || 1.5, dash: c.dash && c.dash.length ? c.dash : undefined, spanGaps: true, points: { show: !!c.dots, size: 7, fill: c.colour } }))],
     hooks: {
       draw: [
         (u) => {
@@ -209,7 +209,7 @@ export function scatter(el, { title, x, y, points, loaded, reference, errors = [
   const series = [{ label: x }, { label: flips.length ? "inversion (tightening fold)" : "inversion (full model)", stroke: "#0072b2", width: flips.length ? 1.5 : 0, spanGaps: true, points: { show: true, size: 9, fill: "#0072b2" } }];
   const data = [xs, pick(points)];
   if (loaded.length) {
-    series.push({ label: "F bar does not fall (see the note below)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, width: 2, fill: "transparent" } });
+    series.push({ label: "F̄ does not fall (see the note below)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, width: 2, fill: "transparent" } });
     data.push(pick(loaded));
   }
   if (reference.length) {

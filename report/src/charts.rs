@@ -214,22 +214,25 @@ fn value_at(series: &[Sample], l_k_bar: f64, quantity: Quantity) -> Option<f64> 
         .map(|s| quantity.of(s))
 }
 
+/// The parameters a caption names: the knot, the rod and its material.
+const CAPTIONED: [&str; 7] = [
+    "n",
+    "h",
+    "mu",
+    "length",
+    "youngs_modulus",
+    "density",
+    "poisson_ratio",
+];
+
 /// What a case's figure holds fixed: n, h, μ, L, the material's E, ρ and ν,
 /// and its loading program when it is not the default pull.
 pub fn case_caption(params: &CaseParams) -> String {
     let json = serde_json::to_value(params).expect("params serialise");
-    let mut parts: Vec<String> = [
-        "n",
-        "h",
-        "mu",
-        "length",
-        "youngs_modulus",
-        "density",
-        "poisson_ratio",
-    ]
-    .iter()
-    .map(|name| symbols::value(name, &json[*name]))
-    .collect();
+    let mut parts: Vec<String> = CAPTIONED
+        .iter()
+        .map(|name| symbols::value(name, &json[*name]))
+        .collect();
     if params.loading.is_some() {
         let stages: Vec<&str> = params.program().iter().map(LoadStage::name).collect();
         parts.push(format!("loading {}", stages.join(" → ")));
@@ -239,25 +242,17 @@ pub fn case_caption(params: &CaseParams) -> String {
 
 /// What every case of a sweep shares (its base), less the varied parameters.
 pub fn sweep_caption(base: &serde_json::Value, varied: &[String]) -> String {
-    [
-        "n",
-        "h",
-        "mu",
-        "length",
-        "youngs_modulus",
-        "density",
-        "poisson_ratio",
-    ]
-    .iter()
-    .filter(|name| {
-        !varied
-            .iter()
-            .any(|v| v == *name || (v == "material" && MATERIAL_CONSTANTS.contains(*name)))
-    })
-    .filter(|name| !base[**name].is_null())
-    .map(|name| symbols::value(name, &base[*name]))
-    .collect::<Vec<_>>()
-    .join(", ")
+    CAPTIONED
+        .iter()
+        .filter(|name| {
+            !varied
+                .iter()
+                .any(|v| v == *name || (v == "material" && MATERIAL_CONSTANTS.contains(*name)))
+        })
+        .filter(|name| !base[**name].is_null())
+        .map(|name| symbols::value(name, &base[*name]))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The constants a named material sets.

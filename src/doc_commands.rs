@@ -2,8 +2,9 @@
 //! code: every `knotsweep ...` command in README.md, ARCHITECTURE.md,
 //! BENCHMARKS.md, python/README.md and docs/*.md parses with this binary's
 //! flags (a `run` or `snapshots` also passes the parameter table's
-//! validation, its start shape file read), and the physics revision that
-//! README.md and docs/API.md state is the code's.
+//! validation, its start shape file read), the physics revision that
+//! README.md and docs/API.md state is the code's, and README.md's claims on
+//! the paper's Fig. 1 are docs/VALIDATION.md's numbers (`knotsweep reproduce`'s).
 use crate::{Cli, Command};
 use clap::Parser;
 use clap::error::ErrorKind;
@@ -31,7 +32,7 @@ fn documents() -> Vec<PathBuf> {
 }
 
 /// The binary's subcommands, the words that make `knotsweep WORD` a command.
-const SUBCOMMANDS: [&str; 8] = [
+const SUBCOMMANDS: [&str; 9] = [
     "validate",
     "run",
     "reproduce",
@@ -40,6 +41,7 @@ const SUBCOMMANDS: [&str; 8] = [
     "serve",
     "worker",
     "sweep",
+    "fit",
 ];
 
 /// A command found in a document: where, and its arguments after `knotsweep`.
@@ -232,5 +234,52 @@ fn documents_state_the_codes_physics_revision() {
                 );
             }
         }
+    }
+}
+
+/// `text` with every run of whitespace one space (a claim may break over lines).
+fn one_line(text: &str) -> String {
+    text.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// README.md says where n = 3 and n = 4 invert against the paper's Fig. 1 in
+/// docs/VALIDATION.md's numbers, which `knotsweep reproduce` writes: its
+/// check rows give the l_k bar reached and the paper's bracket, and the
+/// README's words (inside, outside) follow from them.
+#[test]
+fn readme_fig1_claims_are_the_validation_numbers() {
+    let readme = one_line(&std::fs::read_to_string("README.md").expect("README.md"));
+    let validation = std::fs::read_to_string("docs/VALIDATION.md").expect("docs/VALIDATION.md");
+    for (n, claim) in [
+        (3, "n = 3 inverts {where} the paper's Fig. 1 bracket"),
+        (4, "n = 4 {where}"),
+    ] {
+        let row = (validation.lines())
+            .find(|l| l.starts_with(&format!("| n = {n}, h = 1.6 mm: inversion")))
+            .unwrap_or_else(|| panic!("docs/VALIDATION.md has no n = {n} row"));
+        let bracket = row
+            .split("paper Fig. 1: ")
+            .nth(1)
+            .and_then(|r| r.split("l_k bar ").nth(1))
+            .and_then(|r| r.split(';').next())
+            .expect("the paper's bracket");
+        let (lo, hi) = bracket.split_once('-').expect("lo-hi");
+        let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+        let got = row
+            .split("| l_k bar ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .expect("the l_k bar reached");
+        let value: f64 = got.parse().unwrap();
+        let (where_, number) = if (lo..=hi).contains(&value) {
+            ("inside", format!("(l_k bar {got} in {bracket})"))
+        } else {
+            ("just outside it", format!("(l_k bar {got} against {bracket}"))
+        };
+        let claim = claim.replace("{where}", where_);
+        assert!(
+            readme.contains(&format!("{claim} {number}")),
+            "README.md should say \"{claim} {number}\" (docs/VALIDATION.md: {row})"
+        );
     }
 }

@@ -2,6 +2,7 @@
 //! sweeps and the service (subcommands are added as the features land).
 #[cfg(test)]
 mod doc_commands;
+mod fit;
 mod queue_args;
 mod reproduce;
 mod run;
@@ -45,6 +46,8 @@ enum Command {
     Worker(worker::Args),
     /// Run a sweep locally (resumable) and write its phase diagram.
     Sweep(sweep::Args),
+    /// Fit a parameter (mu by default) to measured inversions over local cases.
+    Fit(fit::Args),
 }
 
 fn main() {
@@ -63,6 +66,7 @@ fn main() {
         Command::Serve(args) => serve::run(args),
         Command::Worker(args) => worker::run(args),
         Command::Sweep(args) => sweep::run(args),
+        Command::Fit(args) => fit::run(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -18,7 +18,12 @@ pub struct ParamFlags {
     given: serde_json::Map<String, Value>,
     /// `--initial-shape FILE`: the points are read from a file on the CLI.
     shape_file: Option<PathBuf>,
+    /// `--material NAME`: a named material's E, rho and nu.
+    material: Option<String>,
 }
+
+/// The flag naming a material of `solver::case::MATERIALS` (as `base.material` of a sweep).
+const MATERIAL: &str = "material";
 
 /// Whether the CLI reads parameter `p` from a file: the start shape's points.
 fn from_file(p: &Parameter) -> bool {
@@ -33,6 +38,7 @@ impl clap::FromArgMatches for ParamFlags {
     }
 
     fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
+        self.material = matches.get_one::<String>(MATERIAL).cloned();
         for p in PARAMETERS {
             if from_file(p) {
                 self.shape_file = matches.get_one::<PathBuf>(p.name).cloned();
@@ -49,7 +55,14 @@ impl clap::Args for ParamFlags {
         let defaults = serde_json::to_value(CaseParams::default()).expect("params serialise");
         let mut grouped: Vec<&Parameter> = PARAMETERS.iter().collect();
         grouped.sort_by_key(|p| Group::ALL.iter().position(|g| *g == p.group));
+        let names: Vec<&str> = solver::case::MATERIALS.iter().map(|m| m.name).collect();
+        let material = clap::Arg::new(MATERIAL)
+            .long(MATERIAL)
+            .help_heading(Group::Rod.title())
+            .value_parser(clap::builder::PossibleValuesParser::new(names))
+            .help("A named material: sets --youngs-modulus, --density and --poisson-ratio to its constants");
         cmd.args(grouped.into_iter().map(|p| flag(p, &defaults[p.name])))
+            .arg(material)
     }
 
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
@@ -136,7 +149,23 @@ fn parse(default: &Value, integer: bool, text: &str) -> Result<Value, String> {
 impl ParamFlags {
     /// The case parameters: the given flags over the paper's defaults.
     pub fn params(&self) -> Result<CaseParams> {
-        let mut params: CaseParams = serde_json::from_value(Value::Object(self.given.clone()))?;
+        let mut given = self.given.clone();
+        if let Some(m) = self.material.as_deref().and_then(solver::case::material) {
+            for (name, value) in [
+                ("youngs_modulus", m.youngs_modulus),
+                ("density", m.density),
+                ("poisson_ratio", m.poisson_ratio),
+            ] {
+                if given.insert(name.to_string(), Value::from(value)).is_some() {
+                    anyhow::bail!(
+                        "--material {} sets --{}: give one or the other",
+                        m.name,
+                        name.replace('_', "-")
+                    );
+                }
+            }
+        }
+        let mut params: CaseParams = serde_json::from_value(Value::Object(given))?;
         if let Some(path) = &self.shape_file {
             let text =
                 std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -201,7 +230,7 @@ pub struct Args {
     /// Write the series as CSV here.
     #[arg(long)]
     csv: Option<PathBuf>,
-    /// Write SVG plots of F bar and H bar against l_k bar (paper Fig. 5 a, b) into this directory.
+    /// Write plots of F bar and H bar against l_k bar (paper Fig. 5 a, b) into this directory, as SVG and PDF.
     #[arg(long)]
     plot: Option<PathBuf>,
     /// Write the snapshots for ParaView into this directory: <out's stem>.pvd over one .vtp per snapshot and part
@@ -281,14 +310,12 @@ pub fn validated(params: &CaseParams) -> Result<ValidCase> {
     })
 }
 
-/// F bar and H bar against l_k bar, with the inversion marked.
+/// F bar and H bar against l_k bar, with the events marked, as SVG and PDF.
 fn write_plots(report: &CaseReport, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let inversion = report.inversion.map(|i| i.l_k_bar);
     for quantity in Quantity::ALL {
-        let svg = case_chart(&report.params, &report.series, inversion, quantity)?;
-        let path = dir.join(format!("{}.svg", quantity.stem()));
-        std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+        let svg = case_chart(&report.params, &report.series, &report.events, quantity)?;
+        crate::sweep::write_figure(dir, quantity.stem(), &svg)?;
     }
     Ok(())
 }

@@ -32,6 +32,15 @@ pub struct Args {
     /// Phase-diagram JSON output [default: PRESET.json for --preset, SPEC-phase-diagram.json for --spec SPEC.json].
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Also write the phase diagram as CSV, one row per point (the table of
+    /// `GET /api/sweeps/{id}/phase-diagram.csv`).
+    #[arg(long, value_name = "PATH")]
+    csv: Option<PathBuf>,
+    /// Write the figures into this directory, as SVG and PDF: the phase
+    /// diagram (`phase`, with a varied parameter) and the curves of every
+    /// case overlaid (`F_bar`, `H_bar`), as `GET /api/sweeps/{id}/figures/` serves them.
+    #[arg(long, value_name = "DIR")]
+    figures: Option<PathBuf>,
     /// Certify every point: also run each case's refined twin (time step
     /// halved) and give each inversion its numerical uncertainty (about 3x the cost).
     #[arg(long)]
@@ -187,6 +196,28 @@ pub fn run(args: Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!(describe(e)))?;
         std::fs::write(&out, serde_json::to_string_pretty(&diagram)?)
             .with_context(|| format!("writing {}", out.display()))?;
+        if let Some(csv) = &args.csv {
+            let table = report::tables::phase_diagram_csv(&serde_json::to_value(&diagram)?);
+            std::fs::write(csv, table).with_context(|| format!("writing {}", csv.display()))?;
+            println!("phase diagram table written to {}", csv.display());
+        }
+        if let Some(dir) = &args.figures {
+            for quantity in report::charts::Quantity::ALL {
+                let svg = core
+                    .sweep_figure(id, quantity)
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
+                write_figure(dir, quantity.stem(), &svg)?;
+            }
+            if !diagram.varied.is_empty() {
+                let svg = core
+                    .phase_figure(id, &[])
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
+                write_figure(dir, "phase", &svg)?;
+            }
+            println!("figures written to {}", dir.display());
+        }
         for p in &diagram.points {
             let values: Vec<String> = p.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
             let certified =
@@ -223,7 +254,7 @@ pub fn run(args: Args) -> Result<()> {
     })
 }
 
-fn describe(e: knotsweep_server::error::CoreError) -> String {
+pub(crate) fn describe(e: knotsweep_server::error::CoreError) -> String {
     use knotsweep_server::error::CoreError;
     match e {
         CoreError::Invalid(fields) => {
@@ -235,4 +266,15 @@ fn describe(e: knotsweep_server::error::CoreError) -> String {
         }
         other => other.to_string(),
     }
+}
+
+/// A chart as `dir/STEM.svg` and `dir/STEM.pdf` (`report::pdf`).
+pub(crate) fn write_figure(dir: &std::path::Path, stem: &str, svg: &str) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join(format!("{stem}.svg"));
+    std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+    let path = dir.join(format!("{stem}.pdf"));
+    std::fs::write(&path, report::pdf::svg_to_pdf(svg)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
 }

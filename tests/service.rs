@@ -98,6 +98,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     let sweep = wait_sweep(&c, &url, id, Duration::from_secs(5), finished).await;
     assert_eq!(count(&sweep, "completed"), 4, "{sweep:#}");
 
+    assert_eq!(sweep["state"], "done", "what was asked, once done: {sweep:#}");
     let (status, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
     assert_eq!(status, StatusCode::OK);
     assert_eq!(diagram["complete"], true);
@@ -162,37 +163,48 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     let (status, svg) = get_text(&c, &format!("{url}/api/cases/{case_id}/figures/F_bar.svg")).await;
     assert_eq!(status, StatusCode::OK);
     let samples: Vec<solver::measurements::Sample> = serde_json::from_value(case["series"].clone()).unwrap();
-    let p = &case["params"];
-    let label = format!(
-        "n = {}, h = {} mm, mu = {}",
-        p["n"],
-        p["h"].as_f64().unwrap() * 1e3,
-        p["mu"]
-    );
-    let expected = report::charts::tightening_chart(
-        &label,
-        report::charts::Quantity::FBar,
-        &[report::charts::CaseCurve {
-            label: label.clone(),
-            series: &samples,
-            inversion: case["result"]["inversion"]["l_k_bar"].as_f64(),
-        }],
-    )
-    .unwrap();
+    let params: solver::case::CaseParams = serde_json::from_value(case["params"].clone()).unwrap();
+    let events: Vec<solver::protocol::Event> =
+        serde_json::from_value(case["result"]["summary"]["events"].clone()).unwrap();
+    let expected =
+        report::charts::case_chart(&params, &samples, &events, report::charts::Quantity::FBar).unwrap();
     assert_eq!(svg, expected);
+    assert!(
+        svg.contains("F̄ = F h² / EI") && svg.contains("μ = 0.1"),
+        "the paper's symbols and units"
+    );
     let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/H_bar.svg")).await;
     assert_eq!(status, StatusCode::OK);
     assert!(
-        svg.starts_with("<svg") && svg.contains("mu = 0.1"),
+        svg.starts_with("<svg") && svg.contains("μ = 0.1") && svg.contains("held fixed: n = "),
         "{}",
         &svg[..200.min(svg.len())]
     );
     let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/phase.svg")).await;
     assert_eq!(status, StatusCode::OK);
     assert!(
-        svg.contains("critical l_k bar") && !svg.contains("simplified model"),
+        svg.contains("critical l̄_k") && !svg.contains("simplified model"),
         "mu axis: no reference line"
     );
+    // The table beside the JSON: one row per point, the JSON's numbers.
+    let (status, csv) = get_text(&c, &format!("{url}/api/sweeps/{id}/phase-diagram.csv")).await;
+    assert_eq!(status, StatusCode::OK);
+    let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
+    let points = diagram["points"].as_array().unwrap();
+    assert_eq!(rows.len(), points.len() + 1, "{csv}");
+    assert_eq!(rows[0][..4], ["case", "μ", "K", "status"]);
+    let l_k = rows[0].iter().position(|c| *c == "l̄_k").unwrap();
+    for (row, point) in rows[1..].iter().zip(points) {
+        assert_eq!(row[0].parse::<i64>().unwrap(), point["case_id"].as_i64().unwrap());
+        assert_eq!(
+            row[1].parse::<f64>().unwrap(),
+            point["params"]["mu"].as_f64().unwrap()
+        );
+        assert_eq!(
+            row[l_k].parse::<f64>().ok(),
+            point["inversion"]["l_k_bar"].as_f64()
+        );
+    }
     let (status, _) = get(&c, &format!("{url}/api/cases/{case_id}/figures/k_bar.svg")).await;
     assert_eq!(status, StatusCode::NOT_FOUND);
 
@@ -443,6 +455,14 @@ async fn cancel_stops_running_cases_at_their_next_heartbeat() {
     let second = logs(&store, ids[1]).await;
     assert_eq!(claims(&second), 0, "{second:?}");
     assert!(second.iter().any(|m| m.contains("before it ran")), "{second:?}");
+    // Cancelled without a result: no progress, no complete phase diagram.
+    assert_eq!(done["progress"], 0.0, "{done:#}");
+    assert_eq!(
+        (done["state"].as_str(), done["status"].as_str()),
+        (Some("cancelled"), Some("cancelled"))
+    );
+    let (_, diagram) = get(&c, &format!("{url}/api/sweeps/{id}/phase-diagram")).await;
+    assert_eq!(diagram["complete"], false, "{diagram:#}");
     // A cancelled sweep cannot be paused or resumed.
     let (status, _) = post(&c, &format!("{url}/api/sweeps/{id}/resume"), &json!({})).await;
     assert_eq!(status, StatusCode::CONFLICT);
@@ -1387,5 +1407,217 @@ async fn queue_figures() {
         (claim_to_done_ms - solver_ms) / 40.0,
         (elapsed * 1000.0 - solver_ms) / 40.0
     );
+    server.shutdown().await.unwrap();
+}
+
+/// A base may name a material, as the grid's axis does: its E, rho and nu;
+/// beside one of those constants it is refused naming the constant.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_base_names_a_material() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 0)).await;
+    let (url, c) = (server.url(), client());
+    let (status, sweep) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": with(tiny_base(), json!({"material": "steel"}))}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CREATED, "{sweep:#}");
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{}/cases", sweep["id"])).await;
+    let (_, case) = get(&c, &format!("{url}/api/cases/{}", cases[0]["case_id"])).await;
+    let (_, materials) = get(&c, &format!("{url}/api/materials")).await;
+    let steel = materials
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "steel")
+        .unwrap();
+    for k in ["youngs_modulus", "density", "poisson_ratio"] {
+        assert_eq!(case["params"][k], steel[k], "{k}");
+    }
+    assert_eq!(case["nodes"], 121, "the node count the case runs with");
+    let (status, refused) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": {"material": "steel", "density": 1000.0}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(refused["fields"][0]["field"], "base.density", "{refused:#}");
+    let (status, refused) = post(
+        &c,
+        &format!("{url}/api/sweeps"),
+        &json!({"base": {"material": "cheese"}}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert!(
+        refused["fields"][0]["reason"].as_str().unwrap().contains("steel"),
+        "{refused:#}"
+    );
+    // A case left at the default node count gives the count it runs with.
+    let (_, sweep) = post(&c, &format!("{url}/api/sweeps"), &json!({})).await;
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{}/cases", sweep["id"])).await;
+    let (_, case) = get(&c, &format!("{url}/api/cases/{}", cases[0]["case_id"])).await;
+    assert!(case["params"]["nodes"].is_null());
+    let default: solver::case::CaseParams = serde_json::from_value(case["params"].clone()).unwrap();
+    assert_eq!(case["nodes"], default.node_count());
+    server.shutdown().await.unwrap();
+}
+
+/// Measured points beside a sweep: as CSV, refused without the varied
+/// parameter, read back, and drawn on the phase diagram and the curves.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn measured_points_are_stored_beside_a_sweep_and_drawn() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 2)).await;
+    let (url, c) = (server.url(), client());
+    let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
+    let id = submit_sweep(&c, &url, &json!({"base": base, "grid": {"mu": [0.1, 0.15]}})).await;
+    let measurements = format!("{url}/api/sweeps/{id}/measurements");
+    let (status, none) = get(&c, &measurements).await;
+    assert_eq!((status, none), (StatusCode::OK, json!([])));
+    let put = |body: Value| {
+        let c = c.clone();
+        let measurements = measurements.clone();
+        async move {
+            let r = c.put(&measurements).json(&body).send().await.unwrap();
+            (r.status(), r.json::<Value>().await.unwrap())
+        }
+    };
+    let (status, refused) = put(json!({"csv": "h,l_k_bar,error\n0.005,116,1\n"})).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(
+        refused["fields"][0]["field"], "points[0].params.mu",
+        "{refused:#}"
+    );
+    let (status, refused) = put(json!({"csv": "mu,l_k_bar,error\n0.12,116,0\n"})).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(refused["fields"][0]["field"], "points[0].error", "{refused:#}");
+    let (status, stored) = put(json!({"csv": "# bench, 2026\nmu,l_k_bar,error\n0.12,116.5,1.5\n"})).await;
+    assert_eq!(status, StatusCode::OK, "{stored:#}");
+    let (_, back) = get(&c, &measurements).await;
+    assert_eq!(
+        back,
+        json!([{"params": {"mu": 0.12}, "l_k_bar": 116.5, "error": 1.5}])
+    );
+    wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
+    let (_, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/phase.svg")).await;
+    assert!(
+        svg.contains("measured (± error)"),
+        "the measured point in the legend"
+    );
+    let (_, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/F_bar.svg")).await;
+    assert!(
+        svg.contains("measured 116.5 ± 1.5"),
+        "the measured inversion on the curves"
+    );
+    // Another sweep's points overlaid on the phase diagram.
+    let other = submit_sweep(&c, &url, &json!({"base": with(tiny_base(), json!({"min_l_k_bar": 105.0, "h": 5.5e-3})), "grid": {"mu": [0.1]}})).await;
+    wait_sweep(&c, &url, other, Duration::from_secs(120), finished).await;
+    let (status, svg) = get_text(
+        &c,
+        &format!("{url}/api/sweeps/{id}/figures/phase.svg?with={other}"),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(
+        svg.contains(&format!("sweep {id}")) && svg.contains(&format!("sweep {other}")),
+        "both sweeps in the legend"
+    );
+    let (status, _) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/phase.svg?with=x")).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    server.shutdown().await.unwrap();
+}
+
+/// A fit recovers the mu that made its measurements: the tool's own
+/// inversions of two rods (h = 3.4 and 2.4 mm) at a known mu, each given an error of 1 in l_k bar,
+/// give back that mu inside the fit's interval, and the interval is no wider
+/// than those errors allow (at most 0.08).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_fit_recovers_the_mu_that_made_its_points() {
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 2)).await;
+    let (url, c) = (server.url(), client());
+    // The paper's rod (the short rods of the other tests invert too erratically with mu to fit).
+    let base = json!({});
+    let truth = 0.3;
+    let radii = [3.4e-3, 2.4e-3];
+    let made = submit_sweep(
+        &c,
+        &url,
+        &json!({"base": with(base.clone(), json!({"mu": truth})), "grid": {"h": radii}}),
+    )
+    .await;
+    wait_sweep(&c, &url, made, Duration::from_secs(600), finished).await;
+    let (_, pd) = get(&c, &format!("{url}/api/sweeps/{made}/phase-diagram")).await;
+    let points: Vec<Value> = (pd["points"].as_array().unwrap().iter())
+        .map(|p| {
+            let l_k_bar = p["inversion"]["l_k_bar"]
+                .as_f64()
+                .unwrap_or_else(|| panic!("no inversion: {p:#}"));
+            json!({"params": {"h": p["params"]["h"]}, "l_k_bar": l_k_bar, "error": 1.0})
+        })
+        .collect();
+
+    // Bad fits are refused at submit time, naming the field.
+    let fits = format!("{url}/api/fits");
+    let (status, refused) = post(
+        &c,
+        &fits,
+        &json!({"parameter": "n", "range": [1, 4], "points": points}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(refused["fields"][0]["field"], "parameter", "{refused:#}");
+    let (status, refused) = post(&c, &fits, &json!({"range": [0.4, 0.05], "points": []})).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    let fields: Vec<&str> = refused["fields"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["field"].as_str().unwrap())
+        .collect();
+    assert_eq!(fields, ["range", "points"], "{refused:#}");
+
+    let (status, fit) = post(
+        &c,
+        &fits,
+        &json!({"parameter": "mu", "range": [0.05, 0.8], "base": base, "points": points}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::ACCEPTED, "{fit:#}");
+    assert_eq!(fit["status"], "running");
+    let id = fit["id"].as_i64().unwrap();
+    let t = Instant::now();
+    let fit = loop {
+        let (_, fit) = get(&c, &format!("{url}/api/fits/{id}")).await;
+        if fit["status"] != "running" {
+            break fit;
+        }
+        assert!(t.elapsed() < Duration::from_secs(1200), "fit not done: {fit:#}");
+        tokio::time::sleep(Duration::from_millis(500)).await;
+    };
+    assert_eq!(fit["status"], "done", "{fit:#}");
+    let (value, lo, hi) = (
+        fit["value"].as_f64().unwrap(),
+        fit["interval"][0].as_f64().unwrap(),
+        fit["interval"][1].as_f64().unwrap(),
+    );
+    println!(
+        "fit: mu = {value:.4} in [{lo:.4}, {hi:.4}], {} evaluations",
+        fit["evaluations"].as_array().unwrap().len()
+    );
+    assert!(
+        lo <= truth && truth <= hi,
+        "{truth} outside [{lo}, {hi}]: {fit:#}"
+    );
+    assert!(hi - lo <= 0.08, "interval {} wide: {fit:#}", hi - lo);
+    // Its cases ran as sweeps of the queue, one per point and evaluation.
+    let sweeps = fit["sweeps"].as_array().unwrap();
+    assert!(sweeps.len() >= 4 && sweeps.len() % 2 == 0, "{fit:#}");
+    let (status, _) = get(&c, &format!("{url}/api/sweeps/{}", sweeps[0])).await;
+    assert_eq!(status, StatusCode::OK);
     server.shutdown().await.unwrap();
 }

@@ -180,6 +180,39 @@ impl Browser {
         self.js("return window.cspViolations", json!([])).await
     }
 
+    /// Sets the window's outer size.
+    async fn size(&self, width: u32, height: u32) {
+        self.call(
+            reqwest::Method::POST,
+            "/window/rect",
+            json!({"width": width, "height": height}),
+        )
+        .await;
+    }
+
+    /// Opens `url` and waits until `ready` (a script) holds; then the page's
+    /// width against the window's and the words of its text that speak code
+    /// (`null`, `undefined`, `NaN`).
+    async fn page(&self, url: &str, ready: &str) -> (u64, u64, Vec<String>) {
+        self.open(url).await;
+        self.until(url, ready, Duration::from_secs(60)).await;
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        let v = self
+            .js(
+                "return [document.documentElement.scrollWidth, window.innerWidth, \
+                 document.body.innerText.match(/\\b(null|undefined|NaN)\\b/g) || []]",
+                json!([]),
+            )
+            .await;
+        let words = v[2]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_str().unwrap().to_string())
+            .collect();
+        (v[0].as_u64().unwrap(), v[1].as_u64().unwrap(), words)
+    }
+
     async fn screenshot(&self, name: &str) {
         let png = self.call(reqwest::Method::GET, "/screenshot", Value::Null).await;
         let path = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("web-{name}.png"));
@@ -319,7 +352,7 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
         .map(|a| (a[0].clone(), a[1].as_str().unwrap_or_default().to_string()))
         .unwrap();
     assert_eq!(hollow, json!(loaded.to_string()), "hollow points: {note}");
-    assert_eq!(note.contains("F bar does not fall"), loaded > 0, "{note}");
+    assert_eq!(note.contains("F̄ does not fall"), loaded > 0, "{note}");
     // Certified: an error bar on every point whose twin inverted too, a red
     // ring on the unconverged ones, and the twins marked in the case table.
     let (bars, unconverged) = sweep_uncertainties(&c, &url, id).await;
@@ -495,7 +528,7 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
                advanced: adv && adv.tagName === 'DETAILS' && !adv.open, dt: !!document.getElementById('p-dt').closest('details.advanced'), \
                n: !!document.getElementById('p-n').closest('details.advanced'), \
                first: [...sets[0].querySelectorAll('.field[data-param]')].map((f) => f.dataset.param).slice(0, 1), \
-               docs: document.querySelectorAll('#params .field details.doc').length, \
+               docs: document.querySelectorAll('#params .field .doc').length, \
                fields: document.querySelectorAll('#params .field input[id^=\"p-\"], #params .field select[id^=\"p-\"]').length}",
             json!([]),
         )
@@ -510,10 +543,7 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
     assert_eq!(layout["dt"], true, "{layout}");
     assert_eq!(layout["n"], false, "{layout}");
     assert_eq!(layout["first"], json!(["n"]), "the table's order: {layout}");
-    assert_eq!(
-        layout["docs"], layout["fields"],
-        "a folded doc per parameter: {layout}"
-    );
+    assert_eq!(layout["docs"], layout["fields"], "a doc per parameter: {layout}");
 
     // The material picker fills E, rho and nu from GET /api/materials.
     let (_, materials) = get(&c, &format!("{url}/api/materials")).await;
@@ -739,5 +769,171 @@ async fn the_api_docs_render_under_the_content_security_policy() {
         .await;
     assert_eq!(browser.csp_violations().await, json!([]));
     browser.screenshot("api-docs").await;
+    server.shutdown().await.unwrap();
+}
+
+/// Every page at 1280 x 900: no sideways scrolling, no `null`, `undefined`
+/// or `NaN` in its text, units beside the numbers that have one, the
+/// paper's symbols; the measured points uploaded drawn on the phase
+/// diagram; a single case's sweep offers no phase diagram to download; the
+/// fits' pages.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => return missing(&why),
+    };
+    browser.size(1280, 900).await;
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 2)).await;
+    let (url, c) = (server.url(), client());
+    let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
+    let id = submit_sweep(&c, &url, &json!({"base": base, "grid": {"mu": [0.1, 0.15]}})).await;
+    let single = submit_sweep(&c, &url, &json!({"base": base})).await;
+    wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
+    wait_sweep(&c, &url, single, Duration::from_secs(120), finished).await;
+    let r = c
+        .put(format!("{url}/api/sweeps/{id}/measurements"))
+        .json(&json!({"csv": "mu,l_k_bar,error\n0.12,116.5,1.5\n0.14,117,2\n"}))
+        .send()
+        .await
+        .unwrap();
+    assert!(r.status().is_success());
+    let (_, fit) = post(
+        &c,
+        &format!("{url}/api/fits"),
+        &json!({"range": [0.05, 0.3], "base": base, "points": [{"params": {}, "l_k_bar": 116.0, "error": 1.0}]}),
+    )
+    .await;
+    let (_, cases) = get(&c, &format!("{url}/api/sweeps/{id}/cases")).await;
+    let case_id = cases[0]["case_id"].as_i64().unwrap();
+
+    let pages = [
+        (
+            "home",
+            format!("{url}/#/"),
+            "return document.getElementById('p-youngs_modulus') !== null && document.querySelectorAll('#sweeps a').length >= 2",
+        ),
+        (
+            "sweep",
+            format!("{url}/#/sweeps/{id}"),
+            "const p = document.getElementById('phase'); return p && p.dataset.measured !== undefined && document.getElementById('plot-f').dataset.series !== undefined",
+        ),
+        (
+            "single",
+            format!("{url}/#/sweeps/{single}"),
+            "return document.getElementById('downloads') !== null && document.getElementById('summary').textContent.includes('done')",
+        ),
+        (
+            "case",
+            format!("{url}/#/cases/{case_id}"),
+            "return document.getElementById('held') !== null && document.querySelector('#plot-f canvas') !== null",
+        ),
+        (
+            "fits",
+            format!("{url}/#/fits"),
+            "return document.querySelectorAll('#fits a').length >= 1",
+        ),
+        (
+            "fit",
+            format!("{url}/#/fits/{}", fit["id"]),
+            "return document.getElementById('evals-head') !== null && document.getElementById('fit').textContent.includes('searched')",
+        ),
+    ];
+    for (name, page, ready) in &pages {
+        let (width, window, words) = browser.page(page, ready).await;
+        browser.screenshot(&format!("1280-{name}")).await;
+        assert!(
+            width <= window,
+            "{name}: the page is {width} px wide in a {window} px window"
+        );
+        assert!(words.is_empty(), "{name}: the page says {words:?}");
+    }
+
+    // The home page: labels by symbol and name, units beside the fields.
+    browser.page(&pages[0].1, pages[0].2).await;
+    let form = browser
+        .js(
+            "const f = (n) => document.querySelector(`.field[data-param=\"${n}\"]`); \
+             return [f('youngs_modulus').querySelector('label').textContent, f('h').querySelector('.unit').textContent, \
+               f('youngs_modulus').querySelector('.unit').textContent, f('mu').querySelector('label').textContent, \
+               document.getElementById('loading-json').textContent, \
+               [...document.querySelectorAll('#stages li strong')].map((s) => s.textContent)]",
+            json!([]),
+        )
+        .await;
+    assert_eq!(form[0], "E · youngs modulus", "{form}");
+    assert_eq!(
+        (form[1].as_str(), form[2].as_str()),
+        (Some("m"), Some("Pa")),
+        "{form}"
+    );
+    assert_eq!(form[3], "μ · mu", "{form}");
+    assert_eq!(form[5], json!(["pull"]), "no double numbering: {form}");
+    // A bad value: its error beside the field and beside the button.
+    browser.js(FILL, json!([{"p-h": "-1"}])).await;
+    browser.submit().await;
+    let error = browser
+        .until(
+            "the errors beside the button",
+            "const e = document.querySelector('.field-error[data-for=\"form\"]'); return e && e.textContent",
+            Duration::from_secs(20),
+        )
+        .await;
+    assert!(error.as_str().unwrap().contains("base.h"), "{error}");
+
+    // The sweep page: symbols, units, the measured points, the table's link.
+    browser.page(&pages[1].1, pages[1].2).await;
+    let sweep = browser
+        .js(
+            "return [document.getElementById('phase').dataset.measured, document.getElementById('cases').textContent, \
+               [...document.querySelectorAll('#downloads a')].map((a) => a.getAttribute('href')), \
+               document.querySelector('#phase .u-title').textContent]",
+            json!([]),
+        )
+        .await;
+    assert_eq!(sweep[0], "2", "the measured points drawn: {sweep}");
+    assert!(sweep[1].as_str().unwrap().contains("μ = 0.1"), "{sweep}");
+    let links = sweep[2].as_array().unwrap();
+    assert!(
+        links.contains(&json!(format!("/api/sweeps/{id}/phase-diagram.csv"))),
+        "{sweep}"
+    );
+    assert!(
+        links.contains(&json!(format!("/api/sweeps/{id}/figures/phase.svg"))),
+        "{sweep}"
+    );
+    assert_eq!(sweep[3], "critical l̄_k against μ", "{sweep}");
+    // A single case: no phase diagram to download.
+    browser.page(&pages[2].1, pages[2].2).await;
+    let links = browser
+        .js(
+            "return [...document.querySelectorAll('#downloads a')].map((a) => a.getAttribute('href'))",
+            json!([]),
+        )
+        .await;
+    assert!(
+        !links
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l.as_str().unwrap().ends_with("phase.svg")),
+        "{links}"
+    );
+    for link in links.as_array().unwrap() {
+        let (status, _) = get_text(&c, &format!("{url}{}", link.as_str().unwrap())).await;
+        assert_eq!(status, reqwest::StatusCode::OK, "{link}");
+    }
+
+    // The case page: h in mm, E in Pa, the node count resolved.
+    browser.page(&pages[3].1, pages[3].2).await;
+    let held = browser
+        .js("return document.getElementById('held').textContent", json!([]))
+        .await;
+    let held = held.as_str().unwrap();
+    assert!(
+        held.contains("h = 5 mm") && held.contains("E = 1800000 Pa") && held.contains("K = 121 nodes"),
+        "{held}"
+    );
     server.shutdown().await.unwrap();
 }

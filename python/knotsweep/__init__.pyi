@@ -449,5 +449,22 @@ class Client:
     def case(self, case_id: int) -> dict[str, Any]: ...
     def series(self, case_id: int, raw: bool = False) -> Any: ...
     def snapshots(self, case_id: int) -> list[dict[str, Any]]: ...
+    def fit(
+        self,
+        points: list[dict[str, Any]],
+        *,
+        parameter: str = "mu",
+        range: tuple[float, float] = (0.05, 0.8),
+        base: dict[str, Any] | None = None,
+        certify: bool = False,
+        tolerance: float | None = None,
+        name: str | None = None,
+        wait: bool = True,
+        timeout: float | None = None,
+        poll: float = 2.0,
+    ) -> dict[str, Any]:
+        """Fits a parameter (mu by default) to measured inversions over the server's queued cases; returns the
+        finished fit (value, interval) unless wait=False."""
+    def fit_status(self, fit_id: int) -> dict[str, Any]: ...
     def limits(self) -> dict[str, Any]: ...
     def health(self) -> dict[str, Any]: ...

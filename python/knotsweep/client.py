@@ -184,6 +184,50 @@ class Client:
             s["points"] = np.asarray(s["points"], dtype=float).reshape(-1, 3)
         return snapshots
 
+    def fit(
+        self,
+        points: list[dict],
+        *,
+        parameter: str = "mu",
+        range: tuple[float, float] = (0.05, 0.8),
+        base: dict | None = None,
+        certify: bool = False,
+        tolerance: float | None = None,
+        name: str | None = None,
+        wait: bool = True,
+        timeout: float | None = None,
+        poll: float = 2.0,
+    ) -> dict:
+        """Fits ``parameter`` (mu by default) within ``range`` to measured
+        inversions: ``points`` a list of ``{"params": {"n": 3, "h": 3.4e-3},
+        "l_k_bar": 129.3, "error": 1.0}`` (``POST /api/fits``). The search
+        runs over queued cases on the server's workers; with ``wait`` (the
+        default) this returns the finished fit, whose ``status`` is ``done``
+        (``value``, ``interval`` [low, high], ``chi_squared``) or ``failed``
+        (``reason``); else the fit as accepted (follow it with
+        ``Client.fit_status``). ``certify=True`` certifies every case so that
+        its numerical uncertainty widens the interval. Raises InvalidInput
+        with the API's fields, TimeoutError after ``timeout`` seconds."""
+        spec: dict[str, Any] = {"parameter": parameter, "range": [float(range[0]), float(range[1])],
+                                "points": [dict(p) for p in points]}
+        for key, value in (("base", base), ("tolerance", tolerance), ("name", name)):
+            if value is not None:
+                spec[key] = value
+        if certify:
+            spec["certify"] = True
+        fit = self._post("/api/fits", spec).json()
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while wait and fit["status"] == "running":
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"fit {fit['id']} not done after {timeout} s")
+            time.sleep(poll)
+            fit = self.fit_status(fit["id"])
+        return fit
+
+    def fit_status(self, fit_id: int) -> dict:
+        """A fit (``GET /api/fits/{id}``): status, evaluations, value and interval when done."""
+        return self._get(f"/api/fits/{fit_id}").json()
+
     def limits(self) -> dict:
         """The service's limits and certification threshold (``/api/limits``):
         ``max_cases``, ``max_body_bytes``, ``max_name_chars``,

@@ -556,22 +556,20 @@ fn figures_section() -> String {
 pub fn n_sweep_figures(get: &Lookup) -> Result<Vec<(&'static str, String)>> {
     let mut figures = Vec::new();
     for (file, quantity, name) in [
-        ("n_sweep_F_bar.svg", Quantity::FBar, "F bar"),
-        ("n_sweep_H_bar.svg", Quantity::HBar, "H bar"),
+        ("n_sweep_F_bar.svg", Quantity::FBar, "F̄"),
+        ("n_sweep_H_bar.svg", Quantity::HBar, "H̄"),
     ] {
         let curves: Vec<CaseCurve> = ["n1", "n2", "n3", "n4"]
             .into_iter()
             .filter_map(get)
-            .map(|(j, r)| CaseCurve {
-                label: format!("n = {}", j.params.n),
-                series: &r.series,
-                inversion: None,
-            })
+            .map(|(j, r)| CaseCurve::new(format!("n = {}", j.params.n), &j.params, &r.series, &[]))
             .collect();
         let svg = tightening_chart(
-            &format!("{name} against l_k bar, h = 1.6 mm, mu = 0.1"),
+            &format!("{name} against l̄_k"),
+            "held fixed: h = 1.6 mm, μ = 0.1",
             quantity,
             &curves,
+            &[],
         )?;
         figures.push((file, svg));
     }

@@ -2,7 +2,7 @@
 //!
 //! | route | what |
 //! | --- | --- |
-//! | `GET /` | a minimal status page |
+//! | `GET /` | the web page (`web/`): sweeps, the submission form, curves and phase diagrams, cases, fits |
 //! | `GET /healthz` | health (503 when degraded) |
 //! | `GET /metrics` | Prometheus text |
 //! | `GET /api/openapi.json`, `GET /api/docs` | OpenAPI document, Swagger UI (embedded, offline) |
@@ -14,6 +14,9 @@
 //! | `POST /api/sweeps/{id}/pause`, `/resume`, `/cancel` | control |
 //! | `GET /api/sweeps/{id}/events` | server-sent progress events |
 //! | `GET /api/sweeps/{id}/phase-diagram` | inversion points of the sweep's cases |
+//! | `GET /api/sweeps/{id}/phase-diagram.csv` | the same, one row per point (`report::tables`) |
+//! | `GET`, `PUT /api/sweeps/{id}/measurements` | measured inversions beside the sweep (`crate::measurements`) |
+//! | `POST /api/fits`, `GET /api/fits`, `GET /api/fits/{id}` | fit a parameter to measured inversions (`crate::fit`) |
 //! | `GET /api/cases/{id}`, `/series.csv`, `/snapshots` | a case, its series as CSV, its snapshots |
 //! | `GET /api/cases/{id}/snapshots.zip` | its snapshots for ParaView (`.pvd` over `.vtp` files, docs/PARAVIEW.md) |
 //!
@@ -27,10 +30,12 @@ use crate::core::Core;
 use crate::error::{ApiError, ErrorBody};
 use crate::events::Feeds;
 use crate::extract::{Id, MAX_PAGE, Page, Paging, Submission};
+use crate::fit::{Evaluation, FitSpec, FitStatus, FitView, MeasuredPoint, Simulated};
 use crate::guard::{self, AllowedHosts};
+use crate::measurements::MeasurementsBody;
 use crate::spec::{Limits, Preset, SweepSpec};
 use crate::views::*;
-use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRef, Path, Request, State};
+use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRef, Path, Query, Request, State};
 use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::sse::{Event, KeepAlive, Sse};
@@ -94,6 +99,13 @@ pub fn router(app: App) -> Router {
         .route("/api/sweeps/{id}/cancel", post(cancel_sweep))
         .route("/api/sweeps/{id}/events", get(sweep_events))
         .route("/api/sweeps/{id}/phase-diagram", get(phase_diagram))
+        .route("/api/sweeps/{id}/phase-diagram.csv", get(phase_diagram_csv))
+        .route(
+            "/api/sweeps/{id}/measurements",
+            get(get_measurements).put(put_measurements),
+        )
+        .route("/api/fits", post(submit_fit).get(list_fits))
+        .route("/api/fits/{id}", get(get_fit))
         .route("/api/cases/{id}", get(get_case))
         .route("/api/cases/{id}/series.csv", get(case_series_csv))
         .route("/api/cases/{id}/snapshots", get(case_snapshots))
@@ -143,17 +155,19 @@ pub fn openapi(token: bool) -> OpenApiDoc {
     ),
     paths(
         submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
-        phase_diagram, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
+        phase_diagram, phase_diagram_csv, get_measurements, put_measurements, submit_fit, list_fits, get_fit, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
     ),
     components(schemas(
         SweepSpec, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
         SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
-        LogLineView, Health, SweepEvent, RunningCase, ServiceLimits, MaterialView
+        LogLineView, Health, SweepEvent, RunningCase, ServiceLimits, MaterialView,
+        MeasurementsBody, FitSpec, MeasuredPoint, FitView, FitStatus, Evaluation, Simulated
     )),
     modifiers(&Extras),
     tags(
         (name = "sweeps", description = "Submit and follow sweeps"),
         (name = "cases", description = "Cases and their results"),
+        (name = "fits", description = "Fit a parameter to measured inversions"),
         (name = "service", description = "Health, metrics, presets")
     )
 )]
@@ -532,6 +546,81 @@ async fn phase_diagram(State(app): State<App>, Id(id): Id) -> Result<Json<PhaseD
     Ok(Json(app.core.phase_diagram(id).await?))
 }
 
+/// The phase diagram as CSV, one row per point: the varied parameters (the
+/// paper's symbols with SI units), status, the inversion (l̄_k, its certified
+/// uncertainty δl̄_k, l_c/L, F̄ and H̄ around it), the simplified model's l̄_k,
+/// the flip back, every event and the reason a point has none.
+#[utoipa::path(get, path = "/api/sweeps/{id}/phase-diagram.csv", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, description = "CSV, one row per point", content_type = "text/csv"),
+        (status = 404, body = ErrorBody)))]
+async fn phase_diagram_csv(State(app): State<App>, Id(id): Id) -> Result<Response, ApiError> {
+    let pd = app.core.phase_diagram(id).await?;
+    let csv = report::tables::phase_diagram_csv(&serde_json::to_value(pd).expect("views serialise"));
+    Ok(attachment(
+        "text/csv; charset=utf-8",
+        &format!("sweep-{id}-phase-diagram.csv"),
+        csv,
+    ))
+}
+
+/// Put measured inversions beside a sweep (replacing any before): a list of
+/// points, or CSV with a header naming the sweep's first varied parameter,
+/// `l_k_bar` and `error` (SI units). They are drawn on the sweep's phase
+/// diagram (with their error bars) and curves.
+#[utoipa::path(put, path = "/api/sweeps/{id}/measurements", tag = "sweeps", params(("id" = i64, Path)),
+    request_body(content = MeasurementsBody),
+    responses((status = 200, body = Vec<MeasuredPoint>), (status = 400, body = ErrorBody), (status = 401, body = ErrorBody),
+        (status = 404, body = ErrorBody), (status = 422, body = ErrorBody)),
+    security((), ("bearer" = [])))]
+async fn put_measurements(
+    State(app): State<App>,
+    Id(id): Id,
+    body: axum::body::Bytes,
+) -> Result<Json<Vec<crate::fit::MeasuredPoint>>, ApiError> {
+    let body: MeasurementsBody = Core::parse_json(&body)?;
+    Ok(Json(app.core.set_measurements(id, body).await?))
+}
+
+/// The measured inversions beside a sweep (an empty list when none were put).
+#[utoipa::path(get, path = "/api/sweeps/{id}/measurements", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = Vec<MeasuredPoint>), (status = 404, body = ErrorBody)))]
+async fn get_measurements(State(app): State<App>, Id(id): Id) -> Result<Json<Vec<MeasuredPoint>>, ApiError> {
+    Ok(Json(app.core.measurements(id).await?))
+}
+
+/// Fit a parameter (mu by default) to measured inversions: the search runs
+/// over queued cases (one sweep per point and evaluation); follow it at
+/// `GET /api/fits/{id}` until its `status` is `done` (with `value` and
+/// `interval`) or `failed` (with `reason`). Fits live in the serving process.
+#[utoipa::path(post, path = "/api/fits", tag = "fits",
+    request_body(content = FitSpec),
+    responses(
+        (status = 202, description = "Accepted: the search runs", body = FitView),
+        (status = 400, description = "Malformed JSON", body = ErrorBody),
+        (status = 401, description = "Token required", body = ErrorBody),
+        (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
+    ),
+    security((), ("bearer" = [])))]
+async fn submit_fit(State(app): State<App>, body: axum::body::Bytes) -> Result<Response, ApiError> {
+    let spec: FitSpec = Core::parse_json(&body)?;
+    let fit = app.core.submit_fit(spec).await?;
+    let location = HeaderValue::from_str(&format!("/api/fits/{}", fit.id)).expect("ascii");
+    Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(fit)).into_response())
+}
+
+/// The fits of this process, oldest first.
+#[utoipa::path(get, path = "/api/fits", tag = "fits", responses((status = 200, body = Vec<FitView>)))]
+async fn list_fits(State(app): State<App>) -> Json<Vec<FitView>> {
+    Json(app.core.list_fits())
+}
+
+/// A fit: its status, evaluations and, when done, `value` and `interval`.
+#[utoipa::path(get, path = "/api/fits/{id}", tag = "fits", params(("id" = i64, Path)),
+    responses((status = 200, body = FitView), (status = 404, body = ErrorBody)))]
+async fn get_fit(State(app): State<App>, Id(id): Id) -> Result<Json<FitView>, ApiError> {
+    Ok(Json(app.core.fit(id)?))
+}
+
 /// A case: parameters, status, result, series, log lines.
 #[utoipa::path(get, path = "/api/cases/{id}", tag = "cases", params(("id" = i64, Path)),
     responses((status = 200, body = CaseDetail), (status = 404, body = ErrorBody)))]
@@ -565,58 +654,99 @@ fn attachment(content_type: &'static str, filename: &str, body: impl IntoRespons
         .into_response()
 }
 
-/// `{id}` and a figure name `F_bar.svg` or `H_bar.svg` from the path.
-fn figure_path(id: &str, figure: &str) -> Result<(i64, Quantity), ApiError> {
+/// A figure's format: the SVG charts are drawn as, or that SVG as PDF.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Svg,
+    Pdf,
+}
+
+/// A figure's name `STEM.svg` or `STEM.pdf` as its stem and format.
+fn figure_name(figure: &str) -> Option<(&str, Format)> {
+    (figure.strip_suffix(".svg").map(|s| (s, Format::Svg)))
+        .or_else(|| figure.strip_suffix(".pdf").map(|s| (s, Format::Pdf)))
+}
+
+/// `{id}` and a figure name `F_bar.svg`, `H_bar.pdf`, ... from the path.
+fn figure_path(id: &str, figure: &str) -> Result<(i64, Quantity, Format), ApiError> {
     let id = id
         .parse()
         .map_err(|_| ApiError::bad_request("id", format!("must be an integer, got {id:?}")))?;
-    let quantity = figure
-        .strip_suffix(".svg")
-        .and_then(Quantity::parse)
+    let (quantity, format) = figure_name(figure)
+        .and_then(|(stem, format)| Some((Quantity::parse(stem)?, format)))
         .ok_or_else(|| {
             ApiError::new(
                 StatusCode::NOT_FOUND,
                 "not_found",
-                "figures: F_bar.svg, H_bar.svg",
+                "figures: F_bar.svg, H_bar.svg (or .pdf)",
                 vec![],
             )
         })?;
-    Ok((id, quantity))
+    Ok((id, quantity, format))
 }
 
-fn svg(text: String) -> Response {
-    ([(header::CONTENT_TYPE, "image/svg+xml")], text).into_response()
+/// A chart's SVG as the answer in `format` (PDF: `report::pdf`).
+fn figure(text: String, format: Format) -> Result<Response, ApiError> {
+    Ok(match format {
+        Format::Svg => ([(header::CONTENT_TYPE, "image/svg+xml")], text).into_response(),
+        Format::Pdf => {
+            let pdf =
+                report::pdf::svg_to_pdf(&text).map_err(|e| crate::error::CoreError::Figure(e.to_string()))?;
+            ([(header::CONTENT_TYPE, "application/pdf")], pdf).into_response()
+        }
+    })
 }
 
-/// F bar or H bar against l_k bar of a case as SVG (the figure of `knotsweep run --plot`).
+/// F bar or H bar against l_k bar of a case as SVG or PDF (the figure of `knotsweep run --plot`).
 #[utoipa::path(get, path = "/api/cases/{id}/figures/{figure}", tag = "cases",
-    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg or H_bar.svg")),
-    responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
+    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg or H_bar.svg, or .pdf")),
+    responses((status = 200, description = "SVG or PDF", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
 async fn case_figure(
     State(app): State<App>,
-    Path((id, figure)): Path<(String, String)>,
+    Path((id, name)): Path<(String, String)>,
 ) -> Result<Response, ApiError> {
-    let (id, quantity) = figure_path(&id, &figure)?;
-    Ok(svg(app.core.case_figure(id, quantity).await?))
+    let (id, quantity, format) = figure_path(&id, &name)?;
+    figure(app.core.case_figure(id, quantity).await?, format)
+}
+
+/// The query of a sweep's figure: `with`, the sweeps whose points the phase
+/// diagram overlays (`?with=3,4`).
+#[derive(Debug, serde::Deserialize)]
+struct FigureQuery {
+    with: Option<String>,
 }
 
 /// F bar or H bar against l_k bar of every finished case of a sweep, overlaid,
-/// or the phase diagram with the simplified model's line, as SVG.
+/// or the phase diagram with the simplified model's line (and the points of
+/// the sweeps `?with=3,4` overlaid), as SVG.
 #[utoipa::path(get, path = "/api/sweeps/{id}/figures/{figure}", tag = "sweeps",
-    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg, H_bar.svg or phase.svg")),
-    responses((status = 200, description = "SVG", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
+    params(("id" = i64, Path), ("figure" = String, Path, description = "F_bar.svg, H_bar.svg, phase.svg or map.svg (two axes), or .pdf"),
+        ("with" = Option<String>, Query, description = "phase.svg: sweeps whose points are overlaid, ids separated by commas")),
+    responses((status = 200, description = "SVG or PDF", content_type = "image/svg+xml"), (status = 404, body = ErrorBody)))]
 async fn sweep_figure(
     State(app): State<App>,
-    Path((id, figure)): Path<(String, String)>,
+    Path((id, name)): Path<(String, String)>,
+    Query(query): Query<FigureQuery>,
 ) -> Result<Response, ApiError> {
-    if figure == "phase.svg" {
+    if let Some(("phase", format)) = figure_name(&name) {
         let id = id
             .parse()
             .map_err(|_| ApiError::bad_request("id", format!("must be an integer, got {id:?}")))?;
-        return Ok(svg(app.core.phase_figure(id).await?));
+        let with = (query.with.as_deref().unwrap_or_default().split(','))
+            .filter(|w| !w.trim().is_empty())
+            .map(|w| w.trim().parse::<i64>())
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|_| ApiError::bad_request("with", "must be sweep ids separated by commas"))?;
+        return figure(app.core.phase_figure(id, &with).await?, format);
     }
-    let (id, quantity) = figure_path(&id, &figure)?;
-    Ok(svg(app.core.sweep_figure(id, quantity).await?))
+    if let Some(("map", format)) = figure_name(&name) {
+        let id = id
+            .parse()
+            .map_err(|_| ApiError::bad_request("id", format!("must be an integer, got {id:?}")))?;
+        return figure(app.core.map_figure(id).await?, format);
+    }
+    let (id, quantity, format) = figure_path(&id, &name)?;
+    figure(app.core.sweep_figure(id, quantity).await?, format)
 }
 
 /// The snapshots of a case: its knot's states kept for viewers

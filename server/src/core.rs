@@ -33,6 +33,8 @@ pub struct Core {
     simplified: Arc<Mutex<SimplifiedSnaps>>,
     /// Slots for the requests' CPU-bound work, one per core.
     computing: Computing,
+    /// The fits of this process (`crate::fit`).
+    pub(crate) fits: Arc<Mutex<crate::fit::Fits>>,
 }
 
 /// The simplified model's snaps, computed or under way, by (n, bits of h).
@@ -47,11 +49,16 @@ impl Core {
             started: Instant::now(),
             simplified: Arc::default(),
             computing: Computing::per_core(),
+            fits: Arc::default(),
         }
     }
 
     pub fn limits(&self) -> &Limits {
         &self.limits
+    }
+
+    pub(crate) fn store(&self) -> &Arc<dyn Store> {
+        &self.store
     }
 
     /// Parses a request body into a spec: 400 for malformed JSON, 422 with the
@@ -257,30 +264,65 @@ impl Core {
         Ok(PhaseDiagram::new(&record, &cases, base, simplified)?)
     }
 
-    /// The phase diagram as SVG: critical l_k bar against the first varied
-    /// parameter (h in mm), the simplified model's line against n or h.
-    pub async fn phase_figure(&self, id: i64) -> Result<String, CoreError> {
+    /// The phase diagram as SVG: critical l̄_k against the first varied
+    /// parameter (h in mm; a second axis splits the points into one series
+    /// per value), the simplified model's line against n or h, and the
+    /// points of the sweeps `with` overlaid; its caption holds what is fixed.
+    pub async fn phase_figure(&self, id: i64, with: &[i64]) -> Result<String, CoreError> {
         let pd = self.phase_diagram(id).await?;
-        let Some(axis) = pd.varied.first() else {
+        let Some(axis) = pd.varied.first().cloned() else {
             return Err(CoreError::NotFound(format!(
                 "a varied parameter in sweep {id} (a single case has no phase diagram)"
             )));
         };
+        let mut diagrams = vec![pd];
+        for other in with {
+            let other_pd = self.phase_diagram(*other).await?;
+            if other_pd.varied.first() != Some(&axis) {
+                return Err(CoreError::Invalid(vec![FieldError::new(
+                    "with",
+                    format!("sweep {other} does not vary {axis} first, as sweep {id} does"),
+                )]));
+            }
+            diagrams.push(other_pd);
+        }
         let scale = if axis == "h" { 1e3 } else { 1.0 };
-        let x = |p: &PhasePoint| p.params.get(axis).and_then(Value::as_f64).map(|v| v * scale);
-        let marks: Vec<charts::PhaseMark> = pd
-            .points
-            .iter()
-            .filter_map(|p| {
-                Some(charts::PhaseMark {
-                    x: x(p)?,
-                    l_k_bar: p.inversion.as_ref()?.l_k_bar,
-                    uncertainty: p.uncertainty.as_ref().and_then(|u| u.absolute),
-                    converged: p.uncertainty.as_ref().is_none_or(|u| u.converged != Some(false)),
-                })
+        let x = |p: &PhasePoint| p.params.get(&axis).and_then(Value::as_f64).map(|v| v * scale);
+        let mark = |p: &PhasePoint| {
+            Some(charts::PhaseMark {
+                x: x(p)?,
+                l_k_bar: p.inversion.as_ref()?.l_k_bar,
+                uncertainty: p.uncertainty.as_ref().and_then(|u| u.absolute),
+                converged: p.uncertainty.as_ref().is_none_or(|u| u.converged != Some(false)),
             })
-            .collect();
-        let simplified: Vec<(f64, f64)> = if axis == "n" || axis == "h" {
+        };
+        // (label, marks) per sweep, and per value of a second axis.
+        let mut groups: Vec<(String, Vec<charts::PhaseMark>)> = Vec::new();
+        for pd in &diagrams {
+            let sweep = if diagrams.len() > 1 {
+                format!("sweep {}", pd.sweep_id)
+            } else {
+                String::new()
+            };
+            for p in &pd.points {
+                let second = pd.varied.get(1).map(|b| report::symbols::value(b, &p.params[b]));
+                let label = [sweep.clone(), second.unwrap_or_default()]
+                    .into_iter()
+                    .filter(|t| !t.is_empty())
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                let at = match groups.iter().position(|(l, _)| *l == label) {
+                    Some(at) => at,
+                    None => {
+                        groups.push((label, Vec::new()));
+                        groups.len() - 1
+                    }
+                };
+                groups[at].1.extend(mark(p));
+            }
+        }
+        let pd = &diagrams[0];
+        let simplified: Vec<(f64, f64)> = if (axis == "n" || axis == "h") && pd.varied.len() == 1 {
             pd.points
                 .iter()
                 .filter_map(|p| Some((x(p)?, p.simplified_l_k_bar?)))
@@ -291,15 +333,96 @@ impl Core {
         let x_label = if axis == "h" {
             "h (mm)".to_string()
         } else {
-            axis.clone()
+            report::symbols::column(&axis)
         };
-        charts::phase_chart(
-            &format!("sweep {id}: critical l_k bar against {x_label}"),
-            &x_label,
-            &marks,
-            &simplified,
-        )
-        .map_err(|e| CoreError::Figure(e.to_string()))
+        let integer_x = solver::case::PARAMETERS
+            .iter()
+            .any(|p| p.name == axis && matches!(p.range, solver::case::Range::Integers(..)));
+        let name = pd
+            .name
+            .as_deref()
+            .or(pd.preset.as_deref())
+            .map_or(String::new(), |n| format!(" ({n})"));
+        let figure = charts::PhaseFigure {
+            title: format!(
+                "Critical {} against {}",
+                report::symbols::L_K_BAR,
+                report::symbols::symbol(&axis)
+            ),
+            caption: format!(
+                "sweep {id}{name}; held fixed: {}",
+                charts::sweep_caption(&pd.base, &pd.varied)
+            ),
+            x_label,
+            integer_x,
+            sets: groups
+                .iter()
+                .filter(|(_, marks)| !marks.is_empty())
+                .map(|(label, marks)| charts::PhaseSet {
+                    label: label.clone(),
+                    marks,
+                })
+                .collect(),
+            simplified,
+            measured: (self.measurements(id).await?.iter())
+                .filter_map(|m| {
+                    Some(charts::Measured {
+                        x: m.params.get(&axis)?.as_f64()? * scale,
+                        l_k_bar: m.l_k_bar,
+                        error: m.error,
+                    })
+                })
+                .collect(),
+        };
+        charts::phase_chart(&figure).map_err(|e| CoreError::Figure(e.to_string()))
+    }
+
+    /// A sweep over two axes as a map (`report::map`): its first axis across
+    /// (h in mm), its second up, each point's critical l̄_k; 404 for a sweep
+    /// with fewer than two axes.
+    pub async fn map_figure(&self, id: i64) -> Result<String, CoreError> {
+        let pd = self.phase_diagram(id).await?;
+        let [a, b] = match &pd.varied[..] {
+            [a, b, ..] => [a.clone(), b.clone()],
+            _ => {
+                return Err(CoreError::NotFound(format!(
+                    "a second varied parameter in sweep {id} (a map needs two axes)"
+                )));
+            }
+        };
+        let scale = |axis: &str| if axis == "h" { 1e3 } else { 1.0 };
+        let label = |axis: &str| {
+            if axis == "h" {
+                "h (mm)".to_string()
+            } else {
+                report::symbols::column(axis)
+            }
+        };
+        let points = (pd.points.iter())
+            .filter_map(|p| {
+                Some(report::map::MapPoint {
+                    x: p.params.get(&a)?.as_f64()? * scale(&a),
+                    y: p.params.get(&b)?.as_f64()? * scale(&b),
+                    l_k_bar: p.inversion.map(|i| i.l_k_bar),
+                })
+            })
+            .collect();
+        let figure = report::map::MapFigure {
+            title: format!(
+                "Critical {} over {} and {}",
+                report::symbols::L_K_BAR,
+                report::symbols::symbol(&a),
+                report::symbols::symbol(&b)
+            ),
+            caption: format!(
+                "sweep {id}; held fixed: {}",
+                charts::sweep_caption(&pd.base, &pd.varied)
+            ),
+            x_label: label(&a),
+            y_label: label(&b),
+            points,
+        };
+        report::map::map_chart(&figure).map_err(|e| CoreError::Figure(e.to_string()))
     }
 
     /// The simplified model's snap-through l_k bar (paper Sec. 5, Figs 14 and
@@ -376,12 +499,12 @@ impl Core {
     pub async fn case_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
         let series = self.series(&c).await?;
-        charts::case_chart(&c.params, &series, inversion_of(&c), quantity)
+        charts::case_chart(&c.params, &series, &events_of(&c), quantity)
             .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
     /// The curves of every finished case of a sweep overlaid (grid order),
-    /// their inversions marked.
+    /// their events marked, its caption holding what is fixed.
     pub async fn sweep_figure(&self, id: i64, quantity: Quantity) -> Result<String, CoreError> {
         let record = self.record(id).await?;
         let mut loaded = Vec::new();
@@ -390,28 +513,44 @@ impl Core {
         for point in views::points(&record, &cases)?.0 {
             let s = point.case;
             if s.case.result.is_some() {
-                let label = SweepCaseView::from((s, &record.varied[..]))
-                    .params
-                    .iter()
-                    .map(|(k, v)| format!("{k} = {v}"))
+                let view = SweepCaseView::from((s, &record.varied[..]));
+                let label = (view.params.iter())
+                    .map(|(k, v)| report::symbols::value(k, v))
                     .collect::<Vec<_>>()
                     .join(", ");
-                loaded.push((label, self.series(&s.case).await?, inversion_of(&s.case)));
+                loaded.push((
+                    label,
+                    self.series(&s.case).await?,
+                    s.case.params.clone(),
+                    events_of(&s.case),
+                ));
             }
         }
         let curves: Vec<CaseCurve> = loaded
             .iter()
-            .map(|(label, series, inversion)| CaseCurve {
-                label: if label.is_empty() {
+            .map(|(label, series, params, events)| {
+                let label = if label.is_empty() {
                     format!("sweep {id}")
                 } else {
                     label.clone()
-                },
-                series,
-                inversion: *inversion,
+                };
+                CaseCurve::new(label, params, series, events)
             })
             .collect();
-        charts::tightening_chart(&format!("sweep {id}"), quantity, &curves)
+        let spec = views::stored_spec(&record)?;
+        let base = spec::base_params(&spec).map_err(|e| {
+            knotsweep_worker::StoreError::Corrupt(format!("sweep {id}'s stored base parameters: {e}"))
+        })?;
+        let base = serde_json::to_value(base).expect("params serialise");
+        let caption = format!(
+            "sweep {id}; held fixed: {}",
+            charts::sweep_caption(&base, &record.varied)
+        );
+        let title = format!("{} against {}", quantity.symbol(), report::symbols::L_K_BAR);
+        let measured: Vec<(f64, f64)> = (self.measurements(id).await?.iter())
+            .map(|m| (m.l_k_bar, m.error))
+            .collect();
+        charts::tightening_chart(&title, &caption, quantity, &curves, &measured)
             .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
@@ -503,9 +642,13 @@ impl Core {
 /// Sweeps read per page when the metrics count them.
 const METRICS_PAGE: usize = 1000;
 
-/// l_k bar of a case's inversion, if it has a result with one.
-fn inversion_of(c: &CaseRecord) -> Option<f64> {
-    c.result.as_ref().and_then(|r| r.inversion).map(|i| i.l_k_bar)
+/// The events of a case's result (its stored summary's), none before it.
+fn events_of(c: &CaseRecord) -> Vec<solver::protocol::Event> {
+    c.result
+        .as_ref()
+        .and_then(|r| r.summary.get("events"))
+        .and_then(|e| serde_json::from_value(e.clone()).ok())
+        .unwrap_or_default()
 }
 
 /// The sweep to store: its cases' parameters and the idempotency key with

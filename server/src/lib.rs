@@ -6,6 +6,7 @@
 //!   the expansion into validated `CaseParams`;
 //! - [`core`]: the typed operations (submit, query, control, phase diagram,
 //!   metrics) over the store (`knotsweep_worker::Store`);
+//! - [`fit`]: fits of a parameter to measured inversions, over sweeps;
 //! - [`api`]: axum handlers, thin adapters over the core (their inputs read by
 //!   the extractors of `extract`), and the OpenAPI document; [`views`] and
 //!   [`error`]: the JSON they return, built from the store's records;
@@ -19,8 +20,10 @@ pub mod core;
 pub mod error;
 pub mod events;
 mod extract;
+pub mod fit;
 pub mod guard;
 mod http;
+pub mod measurements;
 pub mod openapi;
 pub mod spec;
 mod strict_json;

@@ -3,8 +3,9 @@
 //! (every field, its JSON type and the paper's default) plus the table
 //! `solver::case::PARAMETERS`: each field's description, its words and its
 //! bounds where they are fixed numbers (`CaseParams::validate` checks the
-//! same table and is authoritative), and its group as `x-group` (the web
-//! form's sections).
+//! same table and is authoritative), its group as `x-group` (the web
+//! form's sections), its SI unit as `x-unit` and the paper's symbol as
+//! `x-symbol` (`report::symbols`).
 use knotsweep_worker::store::SnapshotChoice;
 use serde_json::Value;
 use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
@@ -31,7 +32,11 @@ fn param_schema(name: &str, default: &Value) -> Schema {
         .default(Some(default.clone()));
     match parameter {
         Some(p) => {
-            let group = Extensions::from_iter([("x-group", serde_json::to_value(p.group).expect("a word"))]);
+            let group = Extensions::from_iter([
+                ("x-group", serde_json::to_value(p.group).expect("a word")),
+                ("x-unit", Value::from(p.unit)),
+                ("x-symbol", Value::from(report::symbols::symbol(p.name))),
+            ]);
             with_range(object.description(Some(p.description())), p).extensions(Some(group))
         }
         None => object,

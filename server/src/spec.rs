@@ -47,9 +47,9 @@ impl Default for Limits {
 /// Every field is optional. `base` sets any case parameter (the rest take the
 /// paper's defaults); `grid` maps parameter names to lists of values, and the
 /// sweep is their cartesian product (axes in alphabetical order, the last axis
-/// varying fastest). Besides the parameters, the axis `material` takes
-/// material names (`GET /api/materials`), each setting `youngs_modulus`,
-/// `density` and `poisson_ratio`. With `preset`, the preset's base and grid are used and
+/// varying fastest). Besides the parameters, `base.material` and the axis
+/// `material` take material names (`GET /api/materials`), each setting
+/// `youngs_modulus`, `density` and `poisson_ratio`. With `preset`, the preset's base and grid are used and
 /// `base` overrides the preset's base (e.g. a coarser `nodes`); `grid` is then
 /// not allowed.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -286,9 +286,38 @@ pub fn base_params(spec: &SweepSpec) -> Result<CaseParams, serde_json::Error> {
         .map(|p| p.base)
         .unwrap_or_default(); // no preset: the given base alone
     if let Some(given) = &spec.base {
-        base.extend(given.clone());
+        base.extend(with_material(given, &mut Vec::new()));
     }
     serde_json::from_value(Value::Object(base))
+}
+
+/// A base with its `material` (a name of `GET /api/materials`, as on the
+/// grid's axis) replaced by the material's three constants; an unknown name,
+/// or a constant given beside it, is an error.
+fn with_material(given: &Map<String, Value>, errors: &mut Vec<FieldError>) -> Map<String, Value> {
+    let mut base = given.clone();
+    let Some(name) = base.remove(MATERIAL_AXIS) else {
+        return base;
+    };
+    let values = axis_values(MATERIAL_AXIS, &name);
+    if values.len() == 1 {
+        let known: Vec<&str> = solver::case::MATERIALS.iter().map(|m| m.name).collect();
+        errors.push(FieldError::new(
+            format!("base.{MATERIAL_AXIS}"),
+            format!("unknown material {name}; known: {}", known.join(", ")),
+        ));
+        return base;
+    }
+    for (constant, value) in values {
+        if base.contains_key(&constant) {
+            errors.push(FieldError::new(
+                format!("base.{constant}"),
+                format!("base.{MATERIAL_AXIS} sets it: give either the material or the constants"),
+            ));
+        }
+        base.insert(constant, value);
+    }
+    base
 }
 
 /// Names of `CaseParams`'s fields (`solver::case::param_names`).
@@ -314,8 +343,9 @@ pub fn expand(spec: &SweepSpec, limits: &Limits) -> Result<Expanded, Vec<FieldEr
     // No preset (an unknown one is already an error): the given base alone.
     let mut base = preset.as_ref().map(|p| p.base.clone()).unwrap_or_default();
     if let Some(given) = &spec.base {
-        errors.extend(check_object("base", given));
-        base.extend(given.clone());
+        let given = with_material(given, &mut errors);
+        errors.extend(check_object("base", &given));
+        base.extend(given);
     }
     let grid = preset.as_ref().map(|p| &p.grid).or(spec.grid.as_ref());
     let axes = check_grid(grid, &names, &mut errors);

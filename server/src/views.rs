@@ -129,7 +129,8 @@ pub struct SweepSummary {
     pub id: i64,
     pub name: Option<String>,
     pub preset: Option<String>,
-    /// `active`, `paused` or `cancelled` (what was asked).
+    /// `active`, `paused` or `cancelled` (what was asked), or `done` once
+    /// every case of an active or paused sweep has finished.
     pub state: String,
     /// Where the sweep is.
     pub status: SweepStatus,
@@ -178,7 +179,8 @@ pub struct SweepDetail {
     /// The accepted specification.
     #[schema(value_type = Object)]
     pub spec: Value,
-    /// Fraction of the sweep done (finished cases plus running fractions).
+    /// Fraction of the sweep done (cases with a result or failed, plus
+    /// running fractions; a cancelled case without a result is not done).
     pub progress: f64,
     /// Estimated seconds to the end (null when unknown or done).
     pub eta_seconds: Option<f64>,
@@ -249,7 +251,8 @@ pub struct PhaseDiagram {
     pub name: Option<String>,
     pub preset: Option<String>,
     pub status: SweepStatus,
-    /// True when every case has finished (result, failure or cancellation).
+    /// True when every case has finished (a result or a failure); false
+    /// while cases run and when some were cancelled without a result.
     pub complete: bool,
     /// Grid axes in order.
     pub varied: Vec<String>,
@@ -298,6 +301,9 @@ pub struct CaseDetail {
     pub solver_version: String,
     #[schema(schema_with = crate::openapi::case_params_ref)]
     pub params: Value,
+    /// The node count K the case runs with (`params.nodes`, or its default
+    /// when that is null).
+    pub nodes: usize,
     pub status: String,
     /// Queue state: queued, running, done, failed, cancelled.
     pub state: String,
@@ -457,12 +463,17 @@ fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
 /// A sweep and its cases per status word.
 impl From<(&SweepRecord, BTreeMap<String, i64>)> for SweepSummary {
     fn from((s, counts): (&SweepRecord, BTreeMap<String, i64>)) -> Self {
+        let status = status_of(s.state, &counts);
         Self {
             id: s.id,
             name: s.name.clone(),
             preset: s.preset.clone(),
-            state: s.state.as_str().to_string(),
-            status: status_of(s.state, &counts),
+            state: match status {
+                SweepStatus::Done => "done",
+                _ => s.state.as_str(),
+            }
+            .to_string(),
+            status,
             total: counts.values().sum(),
             counts,
             created_at: s.created_at,
@@ -637,7 +648,12 @@ impl UncertaintyView {
     }
 }
 
-/// A sweep with its cases: counts, progress, ETA.
+/// Whether a case is done for its sweep: a result, or out of attempts (a
+/// case cancelled without a result is not).
+fn finished(c: &SweepCase) -> bool {
+    c.case.state.is_terminal() && c.case.state != CaseState::Cancelled
+}
+
 /// Cases per status word.
 fn status_counts(cases: &[SweepCase]) -> BTreeMap<String, i64> {
     let mut counts: BTreeMap<String, i64> = BTreeMap::new();
@@ -652,7 +668,7 @@ impl SweepDetail {
     pub fn new(record: &SweepRecord, cases: &[SweepCase]) -> Result<Self, StoreError> {
         let counts = status_counts(cases);
         let total = cases.len().max(1) as f64;
-        let finished = cases.iter().filter(|c| c.case.state.is_terminal()).count() as f64;
+        let finished = cases.iter().filter(|c| finished(c)).count() as f64;
         let running_done: f64 = cases
             .iter()
             .filter(|c| c.case.state == CaseState::Running)
@@ -762,6 +778,7 @@ impl CaseDetail {
             key: c.key.clone(),
             solver_version: c.solver_version.clone(),
             params: serde_json::to_value(&c.params).expect("params serialise"),
+            nodes: c.params.node_count(),
             status: c.status().to_string(),
             state: c.state.as_str().to_string(),
             attempts: c.attempts,
@@ -798,7 +815,7 @@ impl PhaseDiagram {
             name: record.name.clone(),
             preset: record.preset.clone(),
             status: SweepSummary::from((record, status_counts(cases))).status,
-            complete: cases.iter().all(|c| c.case.state.is_terminal()),
+            complete: cases.iter().all(finished),
             varied: record.varied.clone(),
             base,
             solver_version: knotsweep_worker::SOLVER_VERSION.to_string(),

@@ -48,3 +48,17 @@ export function limits() {
   });
   return served;
 }
+
+let info = null;
+/**
+ * Each case parameter's schema (the OpenAPI document's CaseParams properties:
+ * its SI unit `x-unit`, the paper's symbol `x-symbol`, description, default),
+ * fetched once.
+ */
+export function paramInfo() {
+  info ??= get("/api/openapi.json").then((doc) => doc.components.schemas.CaseParams.properties).catch((e) => {
+    info = null;
+    throw e;
+  });
+  return info;
+}

@@ -1,8 +1,8 @@
 // A case: status and reason, the knot in 3D with a slider through the stored
 // snapshots (synchronised with a cursor on the F bar / H bar plots; the
 // inversion's snapshot marked), the series and downloads.
-import { get } from "./api.js";
-import { esc, fmt, duration, notice, $ } from "./util.js";
+import { get, paramInfo } from "./api.js";
+import { esc, fmt, duration, notice, $, LK, FB, HB, param } from "./util.js";
 import { overlay } from "./plot.js";
 import { KnotView } from "./knot3d.js";
 import { program, stageCurves, stageKind, direction } from "./stages.js";
@@ -24,9 +24,9 @@ const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
 
 export async function casePage(main, id) {
   main.innerHTML = `<p><a href="#/">← all sweeps</a> <span id="back"></span></p><h1>Case ${esc(id)}</h1><div id="case">Loading…</div>`;
-  let c, snapshots;
+  let c, snapshots, props;
   try {
-    [c, snapshots] = await Promise.all([get(`/api/cases/${id}`), get(`/api/cases/${id}/snapshots`).catch(() => [])]);
+    [c, snapshots, props] = await Promise.all([get(`/api/cases/${id}`), get(`/api/cases/${id}/snapshots`).catch(() => []), paramInfo()]);
   } catch (e) {
     notice(e.message);
     return;
@@ -45,13 +45,14 @@ export async function casePage(main, id) {
   $("#case").innerHTML = `
     <p><span class="status s-${esc(c.status)}">${esc(c.status)}</span>
       ${r && r.reason ? `<strong>${esc(r.reason)}</strong>` : c.last_error ? `<strong>${esc(c.last_error)}</strong>` : ""}
-      ${inv ? ` · inversion at l_k bar ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), F bar ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, H bar ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r ? " · no inversion" : ""}
+      ${inv ? ` · inversion at ${LK} ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), ${FB} ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, ${HB} ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r ? " · no inversion" : ""}
       ${r ? ` · ${duration(r.wall_time)} on ${esc(r.worker)}` : ` · progress ${fmt(100 * c.progress, 0)} %`}</p>
-    <p class="hint">n = ${p.n}, h = ${fmt(p.h * 1e3, 2)} mm, mu = ${p.mu}, L = ${p.length} m, K = ${p.nodes}; attempts ${c.attempts} of ${c.max_attempts}</p>
+    <p class="hint" id="held">${esc(["n", "h", "mu", "length", "youngs_modulus", "density", "poisson_ratio"].map((k) => param(k, p[k], props)).join(", "))},
+      K = ${c.nodes} nodes${p.nodes === null ? " (the default for this rod)" : ""}; attempts ${c.attempts} of ${c.max_attempts}</p>
     ${quasi && quasi.holds === false ? `<p class="warning" id="not-quasi-static" role="note">Not quasi-static: the kinetic energy was ${fmt(quasi.kinetic_ratio, 4)} of the elastic energy
       (median before each event), over the limit of ${fmt(quasi.limit, 4)}. The pull was too fast for this rod: its curves carry inertia; lower pull_speed or keep mass_scaling (docs/API.md, "Loading programs").</p>` : ""}
     <p class="hint" id="program">Loading program: ${stages.map((st, i) => `${i + 1}. ${esc(stageKind(st))} (${direction(st)})${stageArgs(st)}`).join(" → ")}${p.loading ? "" : " (the default)"}.
-      ${hysteresis ? `Hysteresis: inverted at l_k bar ${fmt(hysteresis.inversion_l_k_bar, 2)} tightening, flipped back at ${fmt(hysteresis.flip_back_l_k_bar, 2)} loosening, width ${fmt(hysteresis.width, 2)}.` : ""}
+      ${hysteresis ? `Hysteresis: inverted at ${LK} ${fmt(hysteresis.inversion_l_k_bar, 2)} tightening, flipped back at ${fmt(hysteresis.flip_back_l_k_bar, 2)} loosening, width ${fmt(hysteresis.width, 2)}.` : ""}
       ${quasi && quasi.holds ? `Quasi-static (kinetic / elastic energy ${fmt(quasi.kinetic_ratio, 5)}, limit ${fmt(quasi.limit, 4)}).` : ""}</p>
     <section aria-labelledby="knot-h"><h2 id="knot-h">The knot</h2>
       <div id="knot" class="knot"></div>
@@ -67,8 +68,8 @@ export async function casePage(main, id) {
     <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
       <p class="hint">Solid: tightening; dashed: loosening; dotted: holding or rotating. ● an inversion, ◇ a flip back.</p>
       <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div>
-      ${events.length ? `<div class="table-wrap"><table class="events" id="events"><thead><tr><th scope="col">Stage</th><th scope="col">Event</th><th scope="col">l_k bar</th>
-        <th scope="col">F bar before → after</th><th scope="col">H bar before → after</th><th scope="col">Kinetic energy ×</th><th scope="col">Clean</th></tr></thead><tbody>
+      ${events.length ? `<div class="table-wrap"><table class="events" id="events"><thead><tr><th scope="col">Stage</th><th scope="col">Event</th><th scope="col">${LK}</th>
+        <th scope="col">${FB} before → after</th><th scope="col">${HB} before → after</th><th scope="col">Kinetic energy ×</th><th scope="col">Clean</th></tr></thead><tbody>
         ${events.map((e) => `<tr data-kind="${esc(e.kind)}"><td>${e.stage + 1}. ${esc(stageKind(stages[e.stage]))} (${esc(e.direction)})</td><td>${e.kind === "flip_back" ? "flip back" : "inversion"}</td>
           <td>${fmt(e.l_k_bar, 2)}</td><td>${fmt(e.F_bar_before, 4)} → ${fmt(e.F_bar_after, 4)}</td><td>${fmt(e.H_bar_before, 3)} → ${fmt(e.H_bar_after, 3)}</td>
           <td>${fmt(e.kinetic_energy_ratio, 1)}</td><td>${e.clean ? "yes" : "no"}</td></tr>`).join("")}</tbody></table></div>` : ""}
@@ -77,20 +78,23 @@ export async function casePage(main, id) {
       <p><a href="/api/cases/${esc(id)}/series.csv" download="case-${esc(id)}.csv">series (CSV)</a> ·
         <a href="/api/cases/${esc(id)}" download="case-${esc(id)}.json">case (JSON)</a> ·
         <a href="/api/cases/${esc(id)}/snapshots" download="case-${esc(id)}-snapshots.json">snapshots (JSON)</a> ·
-        <a href="/api/cases/${esc(id)}/figures/F_bar.svg" download="case-${esc(id)}-F_bar.svg">F bar figure (SVG)</a> ·
-        <a href="/api/cases/${esc(id)}/figures/H_bar.svg" download="case-${esc(id)}-H_bar.svg">H bar figure (SVG)</a></p>
+        ${FB} figure <a href="/api/cases/${esc(id)}/figures/F_bar.svg" download="case-${esc(id)}-F_bar.svg">SVG</a>,
+        <a href="/api/cases/${esc(id)}/figures/F_bar.pdf" download="case-${esc(id)}-F_bar.pdf">PDF</a> ·
+        ${HB} figure <a href="/api/cases/${esc(id)}/figures/H_bar.svg" download="case-${esc(id)}-H_bar.svg">SVG</a>,
+        <a href="/api/cases/${esc(id)}/figures/H_bar.pdf" download="case-${esc(id)}-H_bar.pdf">PDF</a></p>
       <div class="table-wrap series"><table id="series"></table></div></section>`;
   const series = c.series || [];
   const label = (name) => (run, n) => n === 1 ? name : `${name}, ${run.stage + 1}. ${run.kind} (${run.direction})`;
   const marks = (field, colour) => events.map((e) => ({ x: e.l_k_bar, y: e[field], kind: e.kind, colour }));
-  const f = series.length ? overlay($("#plot-f"), { title: "F bar against l_k bar", x: "l_k bar", y: "F bar",
-    curves: stageCurves(series, p, (s) => s.F_bar, "#0072b2", label("F bar")), events: marks("F_bar_before", "#0072b2") }) : null;
-  const h = series.length ? overlay($("#plot-h"), { title: "H bar against l_k bar", x: "l_k bar", y: "H bar",
-    curves: stageCurves(series, p, (s) => s.H_bar, "#d55e00", label("H bar")), events: marks("H_bar_before", "#d55e00") }) : null;
+  const f = series.length ? overlay($("#plot-f"), { title: `${FB} against ${LK}`, x: LK, y: `${FB} = F h² / EI`,
+    curves: stageCurves(series, p, (s) => s.F_bar, "#0072b2", label(FB)), events: marks("F_bar_before", "#0072b2") }) : null;
+  const h = series.length ? overlay($("#plot-h"), { title: `${HB} against ${LK}`, x: LK, y: `${HB} = H / W`,
+    curves: stageCurves(series, p, (s) => s.H_bar, "#d55e00", label(HB)), events: marks("H_bar_before", "#d55e00") }) : null;
   if (!series.length) $("#plot-f").textContent = "No series yet.";
   energies(series);
   const cols = ["l_k_bar", "l_c_over_L", "F_bar", "H_bar", "epsilon", "phi", "contacts", "max_penetration_over_h"];
-  $("#series").innerHTML = `<thead><tr>${cols.map((k) => `<th scope="col">${k}</th>`).join("")}</tr></thead><tbody>` +
+  const heads = { l_k_bar: LK, l_c_over_L: "l_c/L", F_bar: FB, H_bar: HB, epsilon: "ε", phi: "φ (rad)", contacts: "contacts", max_penetration_over_h: "largest penetration / h" };
+  $("#series").innerHTML = `<thead><tr>${cols.map((k) => `<th scope="col">${heads[k]}</th>`).join("")}</tr></thead><tbody>` +
     series.filter((_, i) => i % Math.max(1, Math.ceil(series.length / 200)) === 0)
       .map((s) => `<tr>${cols.map((k) => `<td>${fmt(s[k], 3)}</td>`).join("")}</tr>`).join("") + "</tbody>";
   if (!snapshots.length) {
@@ -104,7 +108,7 @@ export async function casePage(main, id) {
     const contacts = fr.contacts || [];
     view.show(fr.points, contacts);
     const largest = contacts.length ? Math.max(...contacts.map((c) => c.force)) : 0;
-    $("#snapshot-label").textContent = `${Number(slider.value) + 1}/${snapshots.length}: l_k bar ${fmt(fr.l_k_bar)} (${LABELS[fr.label] || fr.label})${fr.label === "at_inversion" ? " ★" : ""}` +
+    $("#snapshot-label").textContent = `${Number(slider.value) + 1}/${snapshots.length}: ${LK} ${fmt(fr.l_k_bar)} (${LABELS[fr.label] || fr.label})${fr.label === "at_inversion" ? " ★" : ""}` +
       ` · ${contacts.length} loaded contacts${contacts.length ? `, largest force ${largest.toExponential(2)} N` : ""}`;
     f?.setMarker(fr.l_k_bar);
     h?.setMarker(fr.l_k_bar);

@@ -204,8 +204,19 @@ function value(p, text) {
   }
 }
 
-/** The first sentence of a description: the field's one-line help (the whole text is a click away). */
-const firstSentence = (text) => (text.match(/^.*?[.;](\s|$)/) || [text])[0].trim();
+/**
+ * The first sentence of a description: the field's one-line help (the whole
+ * text is a click away). A sentence ends at a full stop before a capital or
+ * the end, not at an abbreviation ("eqs. 8-10", "e.g.").
+ */
+export const firstSentence = (text) => (text.match(/^.*?\.(?=\s+[A-Z(]|\s*$)/s) || [text])[0].trim();
+
+/** A parameter's label: the paper's symbol and its name in words ("E · youngs modulus", "n"). */
+function labelOf(p) {
+  const words = p.name.replace(/_/g, " ");
+  const sym = p["x-symbol"];
+  return sym && sym !== p.name ? `${sym} · ${words}` : words;
+}
 
 /** One parameter's row: label (the full doc as its title), value, grid axis, a folded doc, its error. */
 function field(p) {
@@ -215,10 +226,13 @@ function field(p) {
   const input = k === "boolean" || k === "enum"
     ? `<select id="p-${p.name}" name="${p.name}"><option value="">default (${esc(def)})</option>${(p.enum || ["true", "false"]).map((v) => `<option>${esc(v)}</option>`).join("")}</select>`
     : `<input id="p-${p.name}" name="${p.name}" inputmode="${k === "integer" || k === "number" ? "decimal" : "text"}" placeholder="${esc(def || "default")}">`;
+  const first = firstSentence(doc);
+  const rest = doc.slice(first.length).trim();
+  const unit = p["x-unit"] ? `<span class="unit">${esc(p["x-unit"])}</span>` : "";
   return `<div class="field" data-param="${p.name}">
-    <label for="p-${p.name}" title="${esc(doc)}">${esc(p.name)}</label>${input}
+    <label for="p-${p.name}" title="${esc(doc)}">${esc(labelOf(p))}</label><span class="value">${input}${unit}</span>
     <input id="g-${p.name}" class="grid" aria-label="${esc(p.name)} grid values" placeholder="grid: values or start:stop:step">
-    <details class="doc"><summary>${esc(firstSentence(doc))}</summary>${esc(doc)}</details>
+    ${rest ? `<details class="doc"><summary>${esc(first)}</summary>${esc(rest)}</details>` : `<span class="doc">${esc(first)}</span>`}
     <span class="field-error" data-for="${p.name}" role="status"></span></div>`;
 }
 
@@ -228,9 +242,9 @@ function materialPicker(materials) {
   return `<div class="field material" data-param="${MATERIAL_AXIS}">
     <label for="material" title="A named material sets youngs_modulus, density and poisson_ratio">material</label>
     <select id="material"><option value="">custom (the values below)</option>${materials.map((m) =>
-      `<option value="${esc(m.name)}">${esc(m.name)}: E ${m.youngs_modulus.toExponential(2)} Pa, rho ${m.density}, nu ${m.poisson_ratio}</option>`).join("")}</select>
+      `<option value="${esc(m.name)}">${esc(m.name)}: E ${m.youngs_modulus.toExponential(2)} Pa, ρ ${m.density} kg/m³, ν ${m.poisson_ratio}</option>`).join("")}</select>
     <input id="g-${MATERIAL_AXIS}" class="grid" aria-label="material grid values" placeholder="grid: ${esc(materials.map((m) => m.name).slice(0, 3).join(", "))}">
-    <span class="help" id="material-source">Pick one to fill E, rho and nu, or grid over names.</span>
+    <span class="help" id="material-source">Pick one to fill E, ρ and ν, or grid over names.</span>
     <span class="field-error" data-for="${MATERIAL_AXIS}" role="status"></span></div>`;
 }
 
@@ -303,7 +317,7 @@ class ProgramEditor {
         ? `<label>${f.name} <select data-stage="${i}" data-key="${f.name}">${f.words.map((w) => `<option${body[f.name] === w ? " selected" : ""}>${w}</option>`).join("")}</select></label>`
         : `<label>${f.name} <input data-stage="${i}" data-key="${f.name}" inputmode="decimal" size="8" value="${body[f.name] ?? ""}" placeholder="${esc(f.hint)}"${f.required ? " required" : ""}></label>`).join(" ");
       const fixed = !this.stages;
-      return `<li class="stage" data-kind="${k}"><strong>${i + 1}. ${k}</strong> <span class="hint">${esc(STAGE_DOC[k])}</span> ${inputs}
+      return `<li class="stage" data-kind="${k}"><strong>${k}</strong> <span class="hint">${esc(STAGE_DOC[k])}</span> ${inputs}
         ${fixed ? "" : `<button type="button" data-up="${i}" aria-label="move stage ${i + 1} up"${i === 0 ? " disabled" : ""}>↑</button>
         <button type="button" data-remove="${i}" aria-label="remove stage ${i + 1}">Remove</button>`}</li>`;
     }).join("");
@@ -339,7 +353,7 @@ class ProgramEditor {
   }
 
   show() {
-    $("#loading-json", this.root).textContent = this.stages ? JSON.stringify(this.stages) : "null: one tightening";
+    $("#loading-json", this.root).textContent = this.stages ? JSON.stringify(this.stages) : "the default: one pull to the stopping rules";
     this.onchange();
   }
 }
@@ -368,7 +382,7 @@ async function form() {
         const input = $(`#p-${name}`);
         if (input) input.value = m ? String(m[name]) : "";
       }
-      $("#material-source").textContent = m ? m.source : "Pick one to fill E, rho and nu, or grid over names.";
+      $("#material-source").textContent = m ? m.source : "Pick one to fill E, ρ and ν, or grid over names.";
       f.dispatchEvent(new Event("input"));
     };
   }
@@ -418,12 +432,16 @@ async function form() {
         setError("form", e.message);
         return;
       }
+      const elsewhere = [];
       for (const fe of e.fields) {
         const m = fe.field.match(/^(?:base|grid)\.([a-z_]+)/);
         const target = m ? m[1] : fe.field;
-        setError(document.querySelector(`.field-error[data-for="${target}"]`) ? target : "form", `${fe.field}: ${fe.reason}`);
+        if (document.querySelector(`.field-error[data-for="${target}"]`)) setError(target, `${fe.field}: ${fe.reason}`);
+        elsewhere.push(`${fe.field}: ${fe.reason}`);
       }
-      const first = f.querySelector(".field-error:not(:empty)");
+      // Beside the button too: every problem, whichever field it marks.
+      setError("form", `${e.fields.length === 1 ? "1 problem" : `${e.fields.length} problems`}: ${elsewhere.join("; ")}`);
+      const first = f.querySelector(".field .field-error:not(:empty)");
       if (first) {
         const details = first.closest("details.advanced");
         if (details) details.open = true;

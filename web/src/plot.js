@@ -37,10 +37,10 @@ function eventMarker(ctx, px, py, kind, colour) {
 
 /**
  * Overlaid curves. `curves`: [{label, colour, points: [[x, y]...], mark: x|null,
- * dash?, width?, direction?}]; `events`: [{x, y, kind: "inversion"|"flip_back", colour}],
+ * dash?, width?, direction?, dots?}] (dots: each point marked); `events`: [{x, y, kind: "inversion"|"flip_back", colour}],
  * markers on the curves. Returns {plot, setMarker(x)}: a solid vertical line at x (the case page's snapshot).
  */
-export function overlay(el, { title, x, y, curves, width, events = [] }) {
+export function overlay(el, { title, x, y, curves, width, events = [], guides = [] }) {
   const xs = [...new Set(curves.flatMap((c) => c.points.map((p) => p[0])))].sort((a, b) => a - b);
   const index = new Map(xs.map((v, i) => [v, i]));
   const data = [xs];
@@ -60,7 +60,7 @@ export function overlay(el, { title, x, y, curves, width, events = [] }) {
       { label: x, stroke: a.stroke, grid: { stroke: a.grid } },
       { label: y, stroke: a.stroke, grid: { stroke: a.grid } },
     ],
-    series: [{ label: x }, ...curves.map((c) => ({ label: c.label, stroke: c.colour, width: c.width || 1.5, dash: c.dash && c.dash.length ? c.dash : undefined, spanGaps: true, points: { show: false } }))],
+    series: [{ label: x }, ...curves.map((c) => ({ label: c.label, stroke: c.colour, width: c.width || 1.5, dash: c.dash && c.dash.length ? c.dash : undefined, spanGaps: true, points: { show: !!c.dots, size: 7, fill: c.colour } }))],
     hooks: {
       draw: [
         (u) => {
@@ -76,6 +76,16 @@ export function overlay(el, { title, x, y, curves, width, events = [] }) {
             ctx.lineTo(px, u.bbox.top + u.bbox.height);
             ctx.stroke();
           });
+          // Measured inversions: black dashed lines.
+          ctx.strokeStyle = dark() ? "#eee" : "#111";
+          ctx.setLineDash([2, 4]);
+          for (const g of guides) {
+            const px = u.valToPos(g, "x", true);
+            ctx.beginPath();
+            ctx.moveTo(px, u.bbox.top);
+            ctx.lineTo(px, u.bbox.top + u.bbox.height);
+            ctx.stroke();
+          }
           ctx.setLineDash([]);
           for (const e of events) {
             if (e.y === null || e.y === undefined || !Number.isFinite(e.y)) continue;
@@ -99,6 +109,7 @@ export function overlay(el, { title, x, y, curves, width, events = [] }) {
   el.dataset.series = String(curves.length);
   el.dataset.directions = [...new Set(curves.map((c) => c.direction).filter(Boolean))].sort().join(",");
   el.dataset.events = events.map((e) => e.kind).join(",");
+  el.dataset.guides = String(guides.length);
   const plot = new uPlot(opts, data, el);
   return {
     plot,
@@ -187,16 +198,18 @@ function hysteresisBand(band, fill) {
  * A loading program that loosens adds `flips` [[x, y]...] (the flip back, the
  * second fold, hollow green on a dashed line) and `band` [[x, lo, hi]...] (the
  * hysteresis between the folds, shaded); `unsteady` [[x, y]...] rings in
- * orange the points whose case was not quasi-static.
+ * orange the points whose case was not quasi-static. `measured` [[x, y, e]...]:
+ * measured inversions, black with their error bars. `integer`: the x axis
+ * counts (n), ticks at whole numbers only.
  */
-export function scatter(el, { title, x, y, points, loaded, reference, errors = [], unconverged = [], flips = [], band = [], unsteady = [], width }) {
-  const xs = [...new Set([...points, ...loaded, ...reference, ...flips, ...unsteady].map((p) => p[0]))].sort((a, b) => a - b);
+export function scatter(el, { title, x, y, points, loaded, reference, errors = [], unconverged = [], flips = [], band = [], unsteady = [], measured = [], integer = false, width }) {
+  const xs = [...new Set([...points, ...loaded, ...reference, ...flips, ...unsteady, ...measured].map((p) => p[0]))].sort((a, b) => a - b);
   const pick = (list) => xs.map((v) => { const p = list.find((q) => q[0] === v); return p ? p[1] : null; });
   const a = axisColours();
   const series = [{ label: x }, { label: flips.length ? "inversion (tightening fold)" : "inversion (full model)", stroke: "#0072b2", width: flips.length ? 1.5 : 0, spanGaps: true, points: { show: true, size: 9, fill: "#0072b2" } }];
   const data = [xs, pick(points)];
   if (loaded.length) {
-    series.push({ label: "F bar does not fall (see the note below)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, width: 2, fill: "transparent" } });
+    series.push({ label: "F̄ does not fall (see the note below)", stroke: "#0072b2", width: 0, points: { show: true, size: 9, width: 2, fill: "transparent" } });
     data.push(pick(loaded));
   }
   if (reference.length) {
@@ -211,12 +224,17 @@ export function scatter(el, { title, x, y, points, loaded, reference, errors = [
     series.push({ label: "not quasi-static (see the note below)", stroke: "#e69f00", width: 0, points: { show: true, size: 21, width: 2, fill: "transparent" } });
     data.push(pick(unsteady));
   }
+  if (measured.length) {
+    const ink = dark() ? "#eee" : "#111";
+    series.push({ label: "measured (± error)", stroke: ink, width: 0, points: { show: true, size: 9, fill: ink } });
+    data.push(pick(measured));
+  }
   if (unconverged.length) {
     series.push({ label: "unconverged (see the note below)", stroke: "#d00000", width: 0, points: { show: true, size: 17, width: 2, fill: "transparent" } });
     data.push(pick(unconverged));
   }
   // The y scale takes in the bars' ends.
-  const ends = [...errors.flatMap(([, v, e]) => [v - e, v + e]), ...band.flatMap(([, lo, hi]) => [lo, hi])];
+  const ends = [...errors, ...measured].flatMap(([, v, e]) => [v - e, v + e]).concat(band.flatMap(([, lo, hi]) => [lo, hi]));
   const yScale = ends.length
     ? { range: (u, min, max) => uPlot.rangeNum(Math.min(min, ...ends), Math.max(max, ...ends), 0.1, true) }
     : {};
@@ -228,16 +246,18 @@ export function scatter(el, { title, x, y, points, loaded, reference, errors = [
   el.dataset.flips = String(flips.length);
   el.dataset.band = String(band.length);
   el.dataset.unsteady = String(unsteady.length);
+  el.dataset.measured = String(measured.length);
+  const whole = integer ? { incrs: [1, 2, 5, 10, 20, 50, 100], values: (u, vals) => vals.map((v) => (Number.isInteger(v) ? String(v) : "")) } : {};
   return new uPlot({
     title,
     width: width || Math.min(720, el.clientWidth || 720),
     height: 300,
     scales: { x: { time: false, range: padded }, y: yScale },
     axes: [
-      { label: x, stroke: a.stroke, grid: { stroke: a.grid } },
+      { label: x, stroke: a.stroke, grid: { stroke: a.grid }, ...whole },
       { label: y, stroke: a.stroke, grid: { stroke: a.grid } },
     ],
     series,
-    hooks: { drawAxes: [hysteresisBand(band, "rgba(0, 158, 115, 0.18)"), errorBars(errors, "#0072b2")] },
+    hooks: { drawAxes: [hysteresisBand(band, "rgba(0, 158, 115, 0.18)"), errorBars(errors, "#0072b2"), errorBars(measured, dark() ? "#eee" : "#111")] },
   }, data, el);
 }

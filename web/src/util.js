@@ -37,3 +37,33 @@ export function download(name, text, type = "text/plain") {
   a.click();
   setTimeout(() => URL.revokeObjectURL(a.href), 1000);
 }
+
+/** The paper's symbols of the measured quantities. */
+export const LK = "l̄_k";
+export const FB = "F̄";
+export const HB = "H̄";
+
+/** A parameter's symbol (`x-symbol` of `props`, the CaseParams schema's properties), else its name. */
+export const symbol = (name, props) => (props && props[name] && props[name]["x-symbol"]) || name;
+
+/** An axis label: the symbol and its unit, h in mm as the paper's figures ("h (mm)", "μ", "L (m)"). */
+export function axisLabel(name, props) {
+  if (name === "h") return "h (mm)";
+  const unit = props && props[name] && props[name]["x-unit"];
+  return unit ? `${symbol(name, props)} (${unit})` : symbol(name, props);
+}
+
+/** A value on an axis: h in mm, the rest as they are. */
+export const axisValue = (name, v) => (name === "h" ? Number(v) * 1e3 : Number(v));
+
+/**
+ * A parameter's value as legends and tables show it: symbol, value and unit,
+ * h in mm ("h = 1.6 mm", "μ = 0.1", "E = 1.8e+6 Pa"); a null value is its
+ * default.
+ */
+export function param(name, v, props) {
+  if (v === null || v === undefined) return `${symbol(name, props)}: default`;
+  if (name === "h" && typeof v === "number") return `h = ${Number((v * 1e3).toPrecision(6))} mm`;
+  const unit = typeof v === "number" && props && props[name] && props[name]["x-unit"];
+  return `${symbol(name, props)} = ${v}${unit ? ` ${unit}` : ""}`;
+}

@@ -569,8 +569,9 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "",
         doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
-              points), no two non-neighbouring segments closer than 2h, and carry the Alexander polynomial of the \
-              knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).",
+              points), no two non-neighbouring segments closer than 2h by more than 1 % (strands pressed \
+              together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the knot \
+              chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
     Parameter {

@@ -67,17 +67,25 @@ fn check_between_ends(points: &[Vector3<f64>]) -> Result<(), String> {
     }
 }
 
-/// No two non-neighbouring segments closer than 2h (`radius` h).
+/// How far two strands of a start shape may overlap, as a fraction of 2h: a
+/// knot at rest presses its strands together and the contact solve leaves
+/// them overlapping by a small fraction of h, so that a state a case wrote
+/// (its relaxed snapshot) starts a case again as it is.
+pub const START_OVERLAP: f64 = 0.01;
+
+/// No two non-neighbouring segments closer than 2h (`radius` h), less
+/// [`START_OVERLAP`].
 fn check_clearance(points: &[Vector3<f64>], edges: &[f64], radius: f64) -> Result<(), String> {
     let shortest = edges.iter().cloned().fold(f64::INFINITY, f64::min);
     let gap = neighbour_gap(2.0 * radius, shortest);
     for i in 0..edges.len() {
         for j in i + gap + 1..edges.len() {
             let d = closest_points(&points[i], &points[i + 1], &points[j], &points[j + 1]).distance;
-            if d < 2.0 * radius * (1.0 - 1e-6) {
+            if d < 2.0 * radius * (1.0 - START_OVERLAP) {
                 return Err(format!(
-                    "segments {i} and {j} are {d:.3e} m apart, closer than 2h = {:.3e} m",
-                    2.0 * radius
+                    "segments {i} and {j} are {d:.4e} m apart, closer than 2h = {:.4e} m by more than {} %",
+                    2.0 * radius,
+                    100.0 * START_OVERLAP
                 ));
             }
         }

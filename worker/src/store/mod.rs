@@ -444,6 +444,11 @@ pub trait Store: Send + Sync + 'static {
     /// unknown sweep, `Conflict` for pausing or resuming a cancelled one;
     /// cancelling a finished sweep (no case queued or running) changes nothing.
     async fn control_sweep(&self, id: i64, action: SweepAction) -> StoreResult<SweepRecord>;
+    /// Puts measured points (JSON text) beside sweep `id`, replacing any
+    /// before; `NotFound` for an unknown sweep.
+    async fn set_measurements(&self, id: i64, points: &str) -> StoreResult<()>;
+    /// The measured points put beside sweep `id`, if any.
+    async fn measurements(&self, id: i64) -> StoreResult<Option<String>>;
 
     // --- cases (the API) ---
 

@@ -242,6 +242,17 @@ pub(crate) async fn sweeps(store: &dyn Store) {
         store.control_sweep(a.id + 100, SweepAction::Pause).await,
         Err(StoreError::NotFound)
     ));
+
+    // Measured points beside a sweep: none, then the last upload.
+    assert_eq!(store.measurements(b.id).await.unwrap(), None);
+    store.set_measurements(b.id, "[1]").await.unwrap();
+    store.set_measurements(b.id, "[2]").await.unwrap();
+    assert_eq!(store.measurements(b.id).await.unwrap().as_deref(), Some("[2]"));
+    assert_eq!(store.measurements(a.id).await.unwrap(), None, "per sweep");
+    assert!(matches!(
+        store.set_measurements(b.id + 100, "[]").await,
+        Err(StoreError::NotFound)
+    ));
 }
 
 /// Claims and leases: the claim's lease and log line, heartbeats that store

@@ -187,6 +187,30 @@ impl<B: Backend> Store for SqlStore<B> {
         self.served(id, Packed::Snapshots).await
     }
 
+    async fn set_measurements(&self, id: i64, points: &str) -> StoreResult<()> {
+        if self.get_sweep(id).await?.is_none() {
+            return Err(StoreError::NotFound);
+        }
+        sqlx::query(
+            "INSERT INTO measurements (sweep_id, points, created_at) VALUES ($1, $2, $3) \
+             ON CONFLICT (sweep_id) DO UPDATE SET points = excluded.points, created_at = excluded.created_at",
+        )
+        .bind(id)
+        .bind(points)
+        .bind(now_ms())
+        .execute(&self.pool)
+        .await?;
+        Ok(())
+    }
+
+    async fn measurements(&self, id: i64) -> StoreResult<Option<String>> {
+        let row = sqlx::query("SELECT points FROM measurements WHERE sweep_id = $1")
+            .bind(id)
+            .fetch_optional(&self.pool)
+            .await?;
+        row.map(|r| r.text("points")).transpose()
+    }
+
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {
         let rows = sqlx::query("SELECT at, level, message FROM case_logs WHERE case_id = $1 ORDER BY id")
             .bind(id)

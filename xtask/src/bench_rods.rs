@@ -82,6 +82,15 @@ struct MapCase {
 }
 
 impl MapCase {
+    /// Its name in the progress lines.
+    fn label(&self) -> String {
+        let material = MAP_MATERIALS[self.material].0;
+        format!(
+            "{material}, L/h = {}, n = {}, mu = {}",
+            self.ratio, self.n, self.mu
+        )
+    }
+
     /// Its `knotsweep run` flags.
     fn flags(&self, reference: bool) -> Vec<String> {
         let (length, h) = match self.material {
@@ -418,13 +427,13 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
         .collect();
     for c in &cases {
         rods.push(Rod {
-            label: String::new(),
+            label: c.label(),
             flags: c.flags(false),
         });
     }
     for &i in &compared {
         rods.push(Rod {
-            label: String::new(),
+            label: format!("{}, reference pull", cases[i].label()),
             flags: cases[i].flags(true),
         });
     }

@@ -74,8 +74,8 @@ fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
             let s = 0.5 + 0.1 * (0.3 * c as f64).sin();
             let nodes = [c, c + 1, m + 1 + c, m + 2 + c];
             ContactPoint {
-                nodes: [nodes, nodes].concat().try_into().expect("eight nodes"),
-                weights: [1.0 - s, s, s - 1.0, -s, 0.0, 0.0, 0.0, 0.0],
+                nodes: [nodes, nodes, nodes].concat().try_into().expect("twelve nodes"),
+                weights: [1.0 - s, s, s - 1.0, -s, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 width: 4,
                 normal: Vector3::z(),
                 gap: -1e-4,

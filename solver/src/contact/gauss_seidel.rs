@@ -914,7 +914,7 @@ mod tests {
             ContactError::InvalidNode(1)
         );
         let far = ContactPoint {
-            nodes: [0, 1, 2, 9, 0, 1, 2, 9],
+            nodes: [0, 1, 2, 9, 0, 1, 2, 9, 0, 1, 2, 9],
             ..c
         };
         assert_eq!(
@@ -956,8 +956,8 @@ mod tests {
         let (dt, mu) = (0.1, 0.3);
         let t = Vector3::x();
         let c = ContactPoint {
-            nodes: [0, 0, 1, 1, 0, 0, 1, 1],
-            weights: [1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            nodes: [0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1],
+            weights: [1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             width: 4,
             normal: Vector3::z(),
             gap: 0.0,
@@ -1004,8 +1004,8 @@ mod tests {
     fn repeated_node_self_block() {
         // Contact sharing node 1 between A and B (degenerate, but W_cc stays exact).
         let c = ContactPoint {
-            nodes: [0, 1, 1, 2, 0, 1, 1, 2],
-            weights: [0.5, 0.5, -0.3, -0.7, 0.0, 0.0, 0.0, 0.0],
+            nodes: [0, 1, 1, 2, 0, 1, 1, 2, 0, 1, 1, 2],
+            weights: [0.5, 0.5, -0.3, -0.7, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             width: 4,
             normal: Vector3::z(),
             gap: 0.0,

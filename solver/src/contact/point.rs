@@ -15,16 +15,16 @@ pub const CONTACT_NODES: usize = 2 * STENCIL;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ContactPoint {
     /// Global node ids, the first `width` used: a segment contact's
-    /// `(a0, a1, b0, b1)`, a smooth contact's `(a0, a1, b0, b1, a_-1, a_2,
-    /// b_-1, b_2)` (each piece's nodes, then the nodes before and after
-    /// them), so that `nodes[0]` and `nodes[2]` are the first nodes of the
-    /// two segments either way.
+    /// `(a0, a1, b0, b1)`, a smooth contact's two pieces' stencils two
+    /// nodes at a time, `(a0, a1, b0, b1, a_-1, a_2, b_-1, b_2, a_-2, a_3,
+    /// b_-2, b_3)`, so that `nodes[0]` and `nodes[2]` are the first nodes of
+    /// the two segments either way.
     pub nodes: [usize; CONTACT_NODES],
     /// Signed weights: `C_a - C_b = sum_k weights_k x_(nodes_k)` (positive
     /// on A, negative on B), and the force `F` on A puts `weights_k F` on
     /// node `nodes_k`. A segment contact's are `(1 - s, s, -(1 - t), -t)`.
     pub weights: [f64; CONTACT_NODES],
-    /// How many of `nodes` and `weights` the contact uses (4 or 8).
+    /// How many of `nodes` and `weights` the contact uses (4 or 12).
     pub width: usize,
     /// Unit normal `(C_a - C_b) / d`, from B to A.
     pub normal: Vector3<f64>,
@@ -65,19 +65,11 @@ impl ContactPoint {
         mu: f64,
     ) -> Option<Self> {
         let d = closest.distance;
-        let [a0, a1, b0, b1] = nodes;
+        let mut weights = [0.0; CONTACT_NODES];
+        weights[..4].copy_from_slice(&[1.0 - closest.s, closest.s, closest.t - 1.0, -closest.t]);
         (d > 0.0 && d > MIN_NORMAL_DISTANCE * contact_distance).then(|| Self {
-            nodes: [a0, a1, b0, b1, a0, a1, b0, b1],
-            weights: [
-                1.0 - closest.s,
-                closest.s,
-                closest.t - 1.0,
-                -closest.t,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
+            nodes: std::array::from_fn(|k| nodes[k % 4]),
+            weights,
             width: 4,
             normal: (closest.point_a - closest.point_b) / d,
             gap: d - contact_distance,
@@ -100,10 +92,18 @@ impl ContactPoint {
         mu: f64,
     ) -> Option<Self> {
         let d = closest.distance;
-        let (na, nb, wa, wb) = (nodes_a, nodes_b, weights_a, weights_b);
+        // Two slots of A, two of B, and so on (`on_a`).
+        let nodes = std::array::from_fn(|k| {
+            let i = 2 * (k / 4) + k % 2;
+            if on_a(k) { nodes_a[i] } else { nodes_b[i] }
+        });
+        let weights = std::array::from_fn(|k| {
+            let i = 2 * (k / 4) + k % 2;
+            if on_a(k) { weights_a[i] } else { -weights_b[i] }
+        });
         (d > 0.0 && d > MIN_NORMAL_DISTANCE * contact_distance).then(|| Self {
-            nodes: [na[0], na[1], nb[0], nb[1], na[2], na[3], nb[2], nb[3]],
-            weights: [wa[0], wa[1], -wb[0], -wb[1], wa[2], wa[3], -wb[2], -wb[3]],
+            nodes,
+            weights,
             width: CONTACT_NODES,
             normal: (closest.point_a - closest.point_b) / d,
             gap: d - contact_distance,
@@ -145,7 +145,7 @@ impl ContactPoint {
     }
 }
 
-/// Whether slot `k` of [`ContactPoint::nodes`] is on rod A: slots 0, 1, 4, 5.
+/// Whether slot `k` of [`ContactPoint::nodes`] is on rod A: slots 0, 1, 4, 5, 8, 9.
 #[inline]
 fn on_a(k: usize) -> bool {
     k % 4 < 2

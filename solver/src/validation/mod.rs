@@ -32,6 +32,12 @@ const CROSSBAR_SAG: f64 = 1e-2;
 /// drum at nodes 2 mm apart, and its tension ratio falls short by 0.5-0.8 %
 /// of mu phi: the tolerance is 2 % of mu phi.
 const CAPSTAN_PER_MU_PHI: f64 = 0.02;
+/// The washboard row's bound (the issue's): a pulling force that wavers at
+/// the edges' scale by at most 0.5 % of the normal force it carries.
+const WASHBOARD: f64 = 5e-3;
+/// The washboard's mean pulling force: the damping (50/s) drags on the
+/// rope's moving length, 1e-4 of T.
+const WASHBOARD_MEAN: f64 = 1e-3;
 /// The implicit solve's sticking contact: its Delassus operator is the
 /// Newton matrix of the contact-free step, a linearisation whose remainder
 /// (second order in the step's motion) lets it slip 4.5e-5 of a free slide.
@@ -142,6 +148,10 @@ pub fn contact_cases() -> Vec<Case> {
         Case {
             name: "capstan",
             run: capstan_rows,
+        },
+        Case {
+            name: "washboard",
+            run: washboard_rows,
         },
     ]
 }
@@ -333,6 +343,41 @@ fn capstan_rows() -> Vec<CaseResult> {
         }
     }
     rows
+}
+
+/// The washboard (a rope pulled over a rod, frictionless) under the smooth
+/// contact geometry, the segment geometry's fluctuation beside it.
+fn washboard_rows() -> Vec<CaseResult> {
+    use crate::contact::Geometry::{Segment, Smooth};
+    let phi = std::f64::consts::FRAC_PI_2;
+    let segment = match contact::washboard(phi, Segment) {
+        Ok((fluctuation, _)) => format!("{:.2} %", 100.0 * fluctuation),
+        Err(e) => format!("failed: {e}"),
+    };
+    let name = "washboard_frictionless";
+    match contact::washboard(phi, Smooth) {
+        Ok((fluctuation, mean)) => vec![
+            CaseResult::with_error(
+                name,
+                &format!(
+                    "pulling force's fluctuation over one edge of travel / normal force, rope over a rod turned by \
+                     pi/2, smooth contact (segment contact: {segment})"
+                ),
+                0.0,
+                fluctuation,
+                fluctuation,
+                WASHBOARD,
+            ),
+            CaseResult::relative(
+                "washboard_mean_force",
+                "mean pulling force / tension T (frictionless: T)",
+                1.0,
+                mean,
+                WASHBOARD_MEAN,
+            ),
+        ],
+        Err(e) => vec![CaseResult::failed(name, "pulling force's fluctuation", e)],
+    }
 }
 
 /// Row-name suffix of a contact solve: none for the default explicit one.

@@ -852,7 +852,7 @@ async fn materials_route_serves_the_named_materials() {
     assert!(doc["components"]["schemas"].get("MaterialView").is_some());
     // The form's layout of the parameter table: its order and the groups' titles.
     let params = &doc["components"]["schemas"]["CaseParams"];
-    assert_eq!(params["x-order"][0], "n", "{params}");
+    assert_eq!(params["x-order"][0], "knot", "{params}");
     assert_eq!(
         params["x-groups"][1],
         json!({"name": "rod", "title": "Rod and material"})

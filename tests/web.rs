@@ -542,7 +542,7 @@ async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs()
     assert_eq!(layout["advanced"], true, "the solver's group is folded: {layout}");
     assert_eq!(layout["dt"], true, "{layout}");
     assert_eq!(layout["n"], false, "{layout}");
-    assert_eq!(layout["first"], json!(["n"]), "the table's order: {layout}");
+    assert_eq!(layout["first"], json!(["knot"]), "the table's order: {layout}");
     assert_eq!(layout["docs"], layout["fields"], "a doc per parameter: {layout}");
 
     // The material picker fills E, rho and nu from GET /api/materials.

@@ -2,8 +2,8 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FrictionLaw, Geometry, KnotKind, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR,
-    FieldError, Protocol,
+    Candidates, ContactSolve, FieldError, FrictionLaw, Geometry, KnotKind, LoadStage, MAX_NODES,
+    MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{
     self, BraidSpec, BraidWord, Family, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,

@@ -315,7 +315,7 @@ def run(
           of one edge's period in force curves) or "smooth" (C1 cubic curves through the nodes: gap, normal
           and the forces' weights on the nodes vary smoothly as one rod slides along another; a rope pulled
           over a rod wavers by 0.46 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to
-          3.8 % of F bar and its inversion to 128.7, at six times the cost: docs/FIDELITY.md, "Contact
+          3.8 % of F bar and its inversion to 128.7, at five times the cost: docs/FIDELITY.md, "Contact
           geometry"). Range: "segment" or "smooth". Default: "segment". Paper: "segment".
       nodes: Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the
           paper's rod is resolved (docs/FIDELITY.md, "Any rod": the convergence in K). The report's params

@@ -310,7 +310,7 @@ pub(crate) async fn claims(store: &dyn Store) {
     assert_eq!((c.state, c.attempts), (CaseState::Queued, 0));
     assert_eq!(
         last_log(store, c.id).await,
-        "stopped for a cancellation that was withdrawn; queued again"
+        "stopped for a pause, or a cancellation since withdrawn; queued again"
     );
 
     // Expiry: queued again after a backoff, then failed at the second attempt.

@@ -154,7 +154,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
     );
     let (status, csv) = get_text(&c, &format!("{url}/api/cases/{case_id}/series.csv")).await;
     assert_eq!(status, StatusCode::OK);
-    assert!(csv.starts_with("time,l_k_bar,l_c_over_L,F,F_bar,"));
+    assert!(csv.starts_with("time,l_k_bar,l_k_arc_bar,l_c_over_L,F,F_bar,"));
     assert_eq!(csv.lines().count(), series.len() + 1);
     let (status, snapshots) = get(&c, &format!("{url}/api/cases/{case_id}/snapshots")).await;
     assert_eq!(status, StatusCode::OK);

@@ -227,9 +227,10 @@ def run(
           L/2] m. null: the knot builder's default. Default: null.
       initial_shape (m): Start from these points instead of the builder's knot: the polyline must be `length`
           long (within 1 %), every node between the ends along the line joining them (the clamps hold the
-          first and last points), no two non-neighbouring segments closer than 2h, and carry the Alexander
-          polynomial of the knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).
-          Range: null or K = nodes points [x, y, z]. null: the builder's knot. Default: null.
+          first and last points), no two non-neighbouring segments closer than 2h by more than 1 % (strands
+          pressed together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the
+          knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits). Range: null or K =
+          nodes points [x, y, z]. null: the builder's knot. Default: null.
 
     Rod and material:
       h (m): Rod radius h, from L/16000 (the knot builder's edges of at most 4h within 4001 nodes) to below

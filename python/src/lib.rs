@@ -9,7 +9,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::{Map, Value};
-use solver::case::{Group, PARAMETERS, FieldError, Range, ValidCase};
+use solver::case::{FieldError, Group, PARAMETERS, Range, ValidCase};
 use solver::measurements::{COLUMNS, Column, Sample};
 use solver::protocol::{self, Progress, Status};
 use std::time::{Duration, Instant};

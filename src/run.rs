@@ -451,7 +451,7 @@ fn summarise(report: &CaseReport) {
         println!(
             "stage {} ({}): {} at l_k bar {:.2} (the knot's own length {:.2}), F bar {:.4} -> {:.4}, H bar {:.3} -> {:.3}{}",
             e.stage + 1,
-            report.params.program()[e.stage].name(),
+            report.params.program()[e.stage].kind(),
             e.kind,
             e.at.l_k_bar,
             e.at.l_k_arc_bar,

@@ -9,7 +9,7 @@ use clap::builder::PossibleValuesParser;
 use indicatif::{ProgressBar, ProgressStyle};
 use knotsweep_server::views::SweepStatus;
 use knotsweep_server::{Core, Limits};
-use knotsweep_worker::store::{CaseState, SnapshotChoice, SweepAction, SweepState};
+use knotsweep_worker::store::{CaseState, CaseStatus, SnapshotChoice, SweepAction, SweepState};
 use knotsweep_worker::{PoolConfig, WorkerPool};
 use serde_json::Value;
 use std::path::PathBuf;
@@ -164,12 +164,12 @@ pub fn run(args: Args) -> Result<()> {
             let finished = detail
                 .cases
                 .iter()
-                .filter(|c| c.progress >= 1.0 || c.status == "failed")
+                .filter(|c| c.progress >= 1.0 || c.status == CaseStatus::Queue(CaseState::Failed))
                 .count();
             let running = detail
                 .summary
                 .counts
-                .get(CaseState::Running.as_str())
+                .get(&CaseStatus::RUNNING)
                 .copied()
                 .unwrap_or(0);
             let eta = detail

@@ -7,8 +7,8 @@ mod common;
 
 use common::{drop_database, fresh_postgres, missing};
 use knotsweep_worker::store::{
-    CaseState, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep, RetryPolicy,
-    SnapshotChoice, Store, StoreError, StoreOptions, SweepAction, SweepState, open_store,
+    CaseState, CaseStatus, CreateOutcome, FailOutcome, Heartbeat, Idempotency, NewCase, NewSweep,
+    RetryPolicy, SnapshotChoice, Store, StoreError, StoreOptions, SweepAction, SweepState, open_store,
 };
 use solver::case::CaseParams;
 use solver::protocol::{CaseReport, Status};
@@ -234,7 +234,7 @@ async fn cancelling_a_finished_sweep_changes_nothing() {
         assert_eq!(after.state, SweepState::Active, "{}", b.name);
         assert_eq!(after.updated_at, before.updated_at, "{}", b.name);
         let counts = s.sweep_status_counts(id..=id).await.unwrap();
-        assert_eq!(counts, [(id, "completed".to_string(), 1)], "{}", b.name);
+        assert_eq!(counts, [(id, CaseStatus::COMPLETED, 1)], "{}", b.name);
         b.close().await;
     }
 }
@@ -360,14 +360,20 @@ async fn a_new_attempt_of_a_failed_shared_case_leaves_the_finished_sweep_as_it_e
                 .map(|(_, st, n)| (st, n))
                 .collect::<Vec<_>>()
         };
-        assert_eq!(counts(first).await, [("failed".to_string(), 1)], "{}", b.name);
+        assert_eq!(
+            counts(first).await,
+            [(CaseStatus::Queue(CaseState::Failed), 1)],
+            "{}",
+            b.name
+        );
         let cancelled = s.control_sweep(second, SweepAction::Cancel).await.unwrap();
         assert_eq!(cancelled.state, SweepState::Cancelled);
         assert_eq!(
             s.get_case(retry.id).await.unwrap().unwrap().state,
             CaseState::Cancelled
         );
-        assert_eq!(counts(first).await, [("failed".to_string(), 1)], "{}", b.name);
+        let failed_once = [(CaseStatus::Queue(CaseState::Failed), 1)];
+        assert_eq!(counts(first).await, failed_once, "{}", b.name);
         // A third request makes a third attempt; the two earlier rows stay.
         let (third, _) = create(s, sweep(cases(1))).await;
         let again = s.sweep_cases(third).await.unwrap()[0].case.clone();

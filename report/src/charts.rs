@@ -234,7 +234,7 @@ pub fn case_caption(params: &CaseParams) -> String {
         .map(|name| symbols::value(name, &json[*name]))
         .collect();
     if params.loading.is_some() {
-        let stages: Vec<&str> = params.program().iter().map(LoadStage::name).collect();
+        let stages: Vec<String> = params.program().iter().map(|s| s.kind().to_string()).collect();
         parts.push(format!("loading {}", stages.join(" → ")));
     }
     parts.join(", ")

@@ -192,6 +192,10 @@ impl Modify for Extras {
             "FieldError".to_string(),
             RefOr::T(crate::openapi::field_error_schema()),
         );
+        components.schemas.insert(
+            "SnapshotLabel".to_string(),
+            RefOr::T(crate::openapi::snapshot_label_schema()),
+        );
         components.add_security_scheme(
             "bearer",
             SecurityScheme::Http(HttpBuilder::new().scheme(HttpAuthScheme::Bearer).build()),
@@ -750,7 +754,8 @@ async fn sweep_figure(
 }
 
 /// The snapshots of a case: its knot's states kept for viewers
-/// (`[{label, l_k_bar, time, points: [[x, y, z], ...], ...}]`).
+/// (`[{label, l_k_bar, time, points: [[x, y, z], ...], ...}]`; the labels'
+/// words are the `SnapshotLabel` schema's).
 #[utoipa::path(get, path = "/api/cases/{id}/snapshots", tag = "cases", params(("id" = i64, Path)),
     responses((status = 200, description = "JSON array of snapshots", content_type = "application/json"),
         (status = 404, body = ErrorBody)))]

@@ -15,7 +15,6 @@ use knotsweep_worker::store::{
 use report::charts::{self, CaseCurve, Quantity};
 use serde_json::Value;
 use solver::measurements::Sample;
-use solver::protocol::Snapshot;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -174,7 +173,7 @@ impl Core {
         let (Some(first), Some(last)) = (sweeps.first(), sweeps.last()) else {
             return Ok((Vec::new(), total as usize));
         };
-        let mut counts: BTreeMap<i64, BTreeMap<String, i64>> = BTreeMap::new();
+        let mut counts: BTreeMap<i64, BTreeMap<knotsweep_worker::store::CaseStatus, i64>> = BTreeMap::new();
         for (id, status, n) in self.store.sweep_status_counts(first.id..=last.id).await? {
             counts.entry(id).or_default().insert(status, n);
         }
@@ -469,9 +468,9 @@ impl Core {
     pub async fn case(&self, id: i64) -> Result<CaseDetail, CoreError> {
         let c = self.case_record(id).await?;
         let sweeps = self.store.case_sweeps(id).await?;
-        // Read as samples, so that a series stored under older names is served under today's.
+        // Samples (a series stored under older names is read under today's).
         let series = match c.result {
-            Some(_) => Some(serde_json::to_value(self.series(&c).await?).expect("samples serialise")),
+            Some(_) => Some(self.series(&c).await?),
             None => None,
         };
         let logs = self.store.case_logs(id).await?;
@@ -480,12 +479,10 @@ impl Core {
 
     /// A case's stored series; 404 before the result.
     async fn series(&self, c: &CaseRecord) -> Result<Vec<Sample>, CoreError> {
-        let text =
-            self.store.case_series_json(c.id).await?.ok_or_else(|| {
-                CoreError::NotFound(format!("result of case {} (status {})", c.id, c.status()))
-            })?;
-        serde_json::from_str(&text)
-            .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))
+        self.store
+            .case_series(c.id)
+            .await?
+            .ok_or_else(|| CoreError::NotFound(format!("result of case {} (status {})", c.id, c.status())))
     }
 
     /// The series as CSV (one row per sample); 404 before the result.
@@ -554,33 +551,34 @@ impl Core {
             .map_err(|e| CoreError::Figure(e.to_string()))
     }
 
-    /// The snapshots as stored JSON; 404 before the result.
+    /// The snapshots as JSON; 404 before the result. Writing them (over a
+    /// megabyte for a default case: docs/API.md, "Stored results") runs on
+    /// the blocking pool, not on the async workers.
     pub async fn snapshots(&self, id: i64) -> Result<String, CoreError> {
         let c = self.case_record(id).await?;
-        self.snapshots_of(&c).await
+        let snapshots = self.snapshots_of(&c).await?;
+        tokio::task::spawn_blocking(move || serde_json::to_string(&snapshots).expect("snapshots serialise"))
+            .await
+            .map_err(|e| CoreError::Internal(format!("writing the snapshots of case {id}: {e}")))
     }
 
-    /// The stored snapshots JSON of case `c`; 404 before its result.
-    async fn snapshots_of(&self, c: &CaseRecord) -> Result<String, CoreError> {
+    /// The stored snapshots of case `c`; 404 before its result.
+    async fn snapshots_of(&self, c: &CaseRecord) -> Result<Vec<solver::snapshot::Snapshot>, CoreError> {
         let id = c.id;
         self.store
-            .case_snapshots_json(id)
+            .case_snapshots(id)
             .await?
             .ok_or_else(|| CoreError::NotFound(format!("result of case {id} (status {})", c.status())))
     }
 
     /// The snapshots as ParaView files (`report::vtk`: `case-{id}.pvd` over
-    /// `case-{id}/*.vtp`) in a zip archive; 404 before the result.
-    /// Parsing the snapshots (over a megabyte of JSON for a default case:
-    /// docs/API.md, "Stored results") and writing the archive run on the
-    /// blocking pool, not on the async workers.
+    /// `case-{id}/*.vtp`) in a zip archive; 404 before the result. Writing
+    /// the archive runs on the blocking pool, not on the async workers.
     pub async fn snapshots_zip(&self, id: i64) -> Result<Vec<u8>, CoreError> {
         let c = self.case_record(id).await?;
-        let json = self.snapshots_of(&c).await?;
+        let snapshots = self.snapshots_of(&c).await?;
         let h = c.params.h;
         tokio::task::spawn_blocking(move || {
-            let snapshots: Vec<Snapshot> = serde_json::from_str(&json)
-                .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(e.to_string())))?;
             let files = report::vtk::case_files(&format!("case-{id}"), h, &snapshots);
             zip_archive(&files).map_err(|e| CoreError::Figure(e.to_string()))
         })
@@ -642,12 +640,11 @@ impl Core {
 /// Sweeps read per page when the metrics count them.
 const METRICS_PAGE: usize = 1000;
 
-/// The events of a case's result (its stored summary's), none before it.
+/// The events of a case's result, none before it.
 fn events_of(c: &CaseRecord) -> Vec<solver::protocol::Event> {
     c.result
         .as_ref()
-        .and_then(|r| r.summary.get("events"))
-        .and_then(|e| serde_json::from_value(e.clone()).ok())
+        .map(|r| r.summary.events.clone())
         .unwrap_or_default()
 }
 

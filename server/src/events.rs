@@ -14,6 +14,7 @@ use crate::core::Core;
 use crate::error::CoreError;
 use crate::views::{SweepEvent, SweepStatus, SweepUpdate};
 use futures_util::Stream;
+use knotsweep_worker::store::CaseStatus;
 use std::collections::HashMap;
 use std::net::IpAddr;
 use std::sync::{Arc, Mutex};
@@ -55,7 +56,7 @@ type Latest = watch::Receiver<Option<SweepUpdate>>;
 pub struct SweepStamp {
     pub state: knotsweep_worker::store::SweepState,
     pub updated_at: i64,
-    pub counts: Vec<(String, i64)>,
+    pub counts: Vec<(CaseStatus, i64)>,
 }
 
 impl SweepStamp {
@@ -63,7 +64,7 @@ impl SweepStamp {
     fn running(&self) -> bool {
         self.counts
             .iter()
-            .any(|(status, n)| status == "running" && *n > 0)
+            .any(|(status, n)| *status == CaseStatus::RUNNING && *n > 0)
     }
 }
 

@@ -9,6 +9,7 @@
 use knotsweep_worker::store::SnapshotChoice;
 use serde_json::Value;
 use solver::case::{Bound, CaseParams, PARAMETERS, Parameter, Range};
+use solver::snapshot::SnapshotLabel;
 use utoipa::openapi::extensions::Extensions;
 use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
@@ -109,6 +110,70 @@ pub fn snapshot_choice() -> Schema {
         .into()
 }
 
+/// What a snapshot labelled `label` shows, in words.
+fn label_text(label: SnapshotLabel) -> String {
+    use solver::case::StageKind;
+    use solver::protocol::EventKind;
+    use solver::snapshot::EventWhen;
+    let event = |kind| match kind {
+        EventKind::Inversion => "inversion",
+        EventKind::FlipBack => "flip back",
+    };
+    match label {
+        SnapshotLabel::Relaxed => "relaxed start".to_string(),
+        SnapshotLabel::Stage(kind) => match kind {
+            StageKind::Pull => "pulling",
+            StageKind::Release => "releasing",
+            StageKind::Hold => "holding",
+            StageKind::Rotate => "rotating",
+            StageKind::Soft => "pulling on springs",
+        }
+        .to_string(),
+        SnapshotLabel::Event(when, kind) => match when {
+            EventWhen::Near => format!("approaching the {}", event(kind)),
+            EventWhen::Before => format!("just before the {}", event(kind)),
+            EventWhen::At => event(kind).to_string(),
+            EventWhen::After => format!("after the {}", event(kind)),
+        },
+        SnapshotLabel::Final => "end of the program".to_string(),
+        SnapshotLabel::Failure => "where it failed".to_string(),
+        SnapshotLabel::Sample => "a sample".to_string(),
+    }
+}
+
+/// The `SnapshotLabel` component: the words a stored snapshot's `label`
+/// takes (`solver::snapshot::SnapshotLabel`), and as `x-labels` each word's
+/// `description`, the `event` it is around (an event `kind`, or null) and
+/// whether it is the snapshot `at_event`: the web page reads the labels
+/// from here.
+pub fn snapshot_label_schema() -> Schema {
+    let kept: Vec<SnapshotLabel> = (SnapshotLabel::all().into_iter())
+        .filter(|l| *l != SnapshotLabel::Sample)
+        .collect();
+    let labels: serde_json::Map<String, Value> = (kept.iter())
+        .map(|&label| {
+            let at_event = matches!(label, SnapshotLabel::Event(solver::snapshot::EventWhen::At, _));
+            let about = serde_json::json!({
+                "description": label_text(label),
+                "event": label.event(),
+                "at_event": at_event,
+            });
+            (label.to_string(), about)
+        })
+        .collect();
+    let extensions = Extensions::from_iter([("x-labels", Value::Object(labels))]);
+    ObjectBuilder::new()
+        .schema_type(SchemaType::Type(Type::String))
+        .description(Some(
+            "What a snapshot shows: the relaxed start, a stage's regular snapshots (by the stage's key), those \
+             around an event (`near_`, `before_`, `at_`, `after_` and the event's kind), the end (`final`) or \
+             where the case failed (`failure`).",
+        ))
+        .enum_values(Some(kept.iter().map(|l| l.to_string())))
+        .extensions(Some(extensions))
+        .into()
+}
+
 /// The `FieldError` component (`solver::case::FieldError`).
 pub fn field_error_schema() -> Schema {
     let text = |description: &str| {
@@ -155,6 +220,32 @@ mod tests {
         assert_eq!(props["nodes"]["type"], json!(["integer", "null"]));
         let h = props["h"]["description"].as_str().unwrap();
         assert!(h.contains("Range: [L/16000, L/50) m."), "{h}");
+    }
+
+    /// Every stored label is listed with its description, and the
+    /// snapshots at an event are the `at_` ones.
+    #[test]
+    fn the_snapshot_labels_reach_the_schema() {
+        let schema = serde_json::to_value(snapshot_label_schema()).unwrap();
+        let words = schema["enum"].as_array().unwrap();
+        let labels = schema["x-labels"].as_object().unwrap();
+        assert_eq!(words.len(), labels.len());
+        assert!(!labels.contains_key("sample"), "never stored");
+        for word in words {
+            let label = SnapshotLabel::parse(word.as_str().unwrap()).unwrap();
+            let about = &labels[&label.to_string()];
+            assert!(!about["description"].as_str().unwrap().is_empty());
+            assert_eq!(about["event"], serde_json::to_value(label.event()).unwrap());
+        }
+        assert_eq!(
+            labels["at_inversion"],
+            json!({"description": "inversion", "event": "inversion", "at_event": true})
+        );
+        assert_eq!(labels["before_flip_back"]["at_event"], json!(false));
+        assert_eq!(
+            labels["pull"],
+            json!({"description": "pulling", "event": null, "at_event": false})
+        );
     }
 
     #[test]

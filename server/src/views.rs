@@ -8,11 +8,13 @@
 //! The views are built here from the store's records (`From` impls and
 //! constructors), so the core only gathers the records.
 use knotsweep_worker::store::{
-    CaseRecord, CaseState, LogLine, ResultSummary, StoreError, SweepCase, SweepRecord, SweepState,
+    CaseRecord, CaseState, CaseStatus, LogLine, ResultDetails, ResultSummary, StoreError, SweepCase,
+    SweepRecord, SweepState,
 };
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use solver::protocol::{Progress, Status};
+use solver::measurements::Sample;
+use solver::protocol::{Event, Hysteresis, Progress, QuasiStatic, Status};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fmt::Write;
 use utoipa::ToSchema;
@@ -137,7 +139,8 @@ pub struct SweepSummary {
     /// Number of cases.
     pub total: i64,
     /// Cases per status word.
-    pub counts: BTreeMap<String, i64>,
+    #[schema(value_type = BTreeMap<String, i64>)]
+    pub counts: BTreeMap<CaseStatus, i64>,
     pub created_at: i64,
     /// Links: self, phase diagram, events.
     pub links: BTreeMap<String, String>,
@@ -152,7 +155,8 @@ pub struct SweepCaseView {
     /// The grid axes' values of this case.
     #[schema(value_type = BTreeMap<String, Object>)]
     pub params: BTreeMap<String, Value>,
-    pub status: String,
+    #[schema(value_type = String)]
+    pub status: CaseStatus,
     /// The result existed when the sweep was submitted (reused, not rerun).
     pub cached: bool,
     pub attempts: u32,
@@ -213,7 +217,8 @@ pub struct PhasePoint {
     #[schema(value_type = BTreeMap<String, Object>)]
     pub params: BTreeMap<String, Value>,
     /// Status word of the case.
-    pub status: String,
+    #[schema(value_type = String)]
+    pub status: CaseStatus,
     /// The inversion point, or null (see `reason`).
     pub inversion: Option<InversionPoint>,
     /// Null when there is an inversion; otherwise why not: no inversion before
@@ -229,16 +234,16 @@ pub struct PhasePoint {
     /// Where the program loosens after the inversion: the loop's flip back
     /// and the hysteresis width; null otherwise.
     #[schema(value_type = Option<Object>)]
-    pub hysteresis: Option<Value>,
+    pub hysteresis: Option<Hysteresis>,
     /// Every event of the case's program (stage, direction, kind, l_k bar,
     /// F bar and H bar around it, clean).
     #[schema(value_type = Vec<Object>)]
-    pub events: Vec<Value>,
+    pub events: Vec<Event>,
     /// Whether the loading stayed quasi-static (kinetic over elastic energy
     /// against its limit); null before the result, or for results stored
     /// before it was measured.
     #[schema(value_type = Option<Object>)]
-    pub quasi_static: Option<Value>,
+    pub quasi_static: Option<QuasiStatic>,
 }
 
 /// The phase diagram of a sweep: for each case its varied parameters, status
@@ -272,12 +277,13 @@ pub struct PhaseDiagram {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, ToSchema)]
 pub struct ResultView {
     /// The solver's status.
-    pub outcome: String,
+    #[schema(value_type = String)]
+    pub outcome: Status,
     pub reason: String,
     pub inversion: Option<InversionPoint>,
     /// Determinants and solver statistics.
     #[schema(value_type = Object)]
-    pub summary: Value,
+    pub summary: ResultDetails,
     pub wall_time: f64,
     /// Lease owner that computed it.
     pub worker: String,
@@ -304,9 +310,11 @@ pub struct CaseDetail {
     /// The node count K the case runs with (`params.nodes`, or its default
     /// when that is null).
     pub nodes: usize,
-    pub status: String,
+    #[schema(value_type = String)]
+    pub status: CaseStatus,
     /// Queue state: queued, running, done, failed, cancelled.
-    pub state: String,
+    #[schema(value_type = String)]
+    pub state: CaseState,
     pub attempts: u32,
     pub max_attempts: u32,
     pub progress: f64,
@@ -326,7 +334,7 @@ pub struct CaseDetail {
     /// active_contacts, max_penetration_over_h, epsilon, phi,
     /// newton_iterations, dt), null before the result.
     #[schema(value_type = Option<Vec<Object>>)]
-    pub series: Option<Value>,
+    pub series: Option<Vec<Sample>>,
     pub logs: Vec<LogLineView>,
     pub links: BTreeMap<String, String>,
 }
@@ -359,7 +367,8 @@ pub struct SweepEvent {
     pub sweep_id: i64,
     pub status: SweepStatus,
     pub total: i64,
-    pub counts: BTreeMap<String, i64>,
+    #[schema(value_type = BTreeMap<String, i64>)]
+    pub counts: BTreeMap<CaseStatus, i64>,
     pub progress: f64,
     pub eta_seconds: Option<f64>,
     pub running: Vec<RunningCase>,
@@ -377,7 +386,7 @@ impl From<&SweepDetail> for SweepEvent {
             running: d
                 .cases
                 .iter()
-                .filter(|c| c.status == CaseState::Running.as_str())
+                .filter(|c| c.status == CaseStatus::RUNNING)
                 .map(|c| RunningCase {
                     case_id: c.case_id,
                     progress: c.progress,
@@ -445,12 +454,9 @@ fn links(id: i64) -> BTreeMap<String, String> {
     ])
 }
 
-fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
-    let open = |w: &str| counts.get(w).copied().unwrap_or(0);
-    let (queued, running) = (
-        open(CaseState::Queued.as_str()),
-        open(CaseState::Running.as_str()),
-    );
+fn status_of(state: SweepState, counts: &BTreeMap<CaseStatus, i64>) -> SweepStatus {
+    let open = |status| counts.get(&status).copied().unwrap_or(0);
+    let (queued, running) = (open(CaseStatus::QUEUED), open(CaseStatus::RUNNING));
     match state {
         SweepState::Cancelled => SweepStatus::Cancelled,
         _ if queued + running == 0 => SweepStatus::Done,
@@ -461,8 +467,8 @@ fn status_of(state: SweepState, counts: &BTreeMap<String, i64>) -> SweepStatus {
 }
 
 /// A sweep and its cases per status word.
-impl From<(&SweepRecord, BTreeMap<String, i64>)> for SweepSummary {
-    fn from((s, counts): (&SweepRecord, BTreeMap<String, i64>)) -> Self {
+impl From<(&SweepRecord, BTreeMap<CaseStatus, i64>)> for SweepSummary {
+    fn from((s, counts): (&SweepRecord, BTreeMap<CaseStatus, i64>)) -> Self {
         let status = status_of(s.state, &counts);
         Self {
             id: s.id,
@@ -486,7 +492,7 @@ impl From<(&SweepRecord, BTreeMap<String, i64>)> for SweepSummary {
 fn reason_of(c: &CaseRecord) -> Option<String> {
     match (&c.result, c.state) {
         (Some(r), _) if r.inversion.is_some() => None,
-        (Some(r), _) if r.outcome == "completed" => Some(match c.params.max_force_bar {
+        (Some(r), _) if r.outcome == Status::Completed => Some(match c.params.max_force_bar {
             Some(f) => format!(
                 "no inversion detected before the case stopped (at l_k bar {} or F bar {f})",
                 c.params.min_l_k_bar
@@ -497,7 +503,11 @@ fn reason_of(c: &CaseRecord) -> Option<String> {
             ),
         }),
         (Some(r), _) => Some(format!("{}: {}", r.outcome, r.reason)),
-        (None, CaseState::Failed) => Some(c.last_error.clone().unwrap_or_else(|| "failed".to_string())),
+        (None, CaseState::Failed) => Some(
+            c.last_error
+                .clone()
+                .unwrap_or_else(|| CaseState::Failed.as_str().to_string()),
+        ),
         (None, CaseState::Cancelled) => Some(CaseState::Cancelled.as_str().to_string()),
         (None, CaseState::Queued) => Some(match &c.last_error {
             Some(e) => format!("not computed yet (queued; last attempt: {e})"),
@@ -520,7 +530,7 @@ impl From<(&SweepCase, &[String])> for SweepCaseView {
                 .iter()
                 .map(|name| (name.clone(), varied_value(name, &c.params, &params)))
                 .collect(),
-            status: c.status().to_string(),
+            status: c.status(),
             cached: s.cached,
             attempts: c.attempts,
             progress: if c.state == CaseState::Done {
@@ -567,8 +577,10 @@ pub struct Point<'a> {
 
 /// The sweep's stored specification; `Corrupt` when it no longer parses.
 pub fn stored_spec(record: &SweepRecord) -> Result<crate::spec::SweepSpec, StoreError> {
-    serde_json::from_value(record.spec.clone())
-        .map_err(|e| StoreError::Corrupt(format!("sweep {}'s stored specification: {e}", record.id)))
+    serde_json::from_value(record.spec.clone()).map_err(|source| StoreError::Json {
+        what: format!("sweep {}'s specification", record.id),
+        source,
+    })
 }
 
 /// The points of a sweep of `cases` (in position order) and whether it is
@@ -654,11 +666,11 @@ fn finished(c: &SweepCase) -> bool {
     c.case.state.is_terminal() && c.case.state != CaseState::Cancelled
 }
 
-/// Cases per status word.
-fn status_counts(cases: &[SweepCase]) -> BTreeMap<String, i64> {
-    let mut counts: BTreeMap<String, i64> = BTreeMap::new();
+/// Cases per status.
+fn status_counts(cases: &[SweepCase]) -> BTreeMap<CaseStatus, i64> {
+    let mut counts: BTreeMap<CaseStatus, i64> = BTreeMap::new();
     for c in cases {
-        *counts.entry(c.case.status().to_string()).or_default() += 1;
+        *counts.entry(c.case.status()).or_default() += 1;
     }
     counts
 }
@@ -742,7 +754,7 @@ fn eta(cases: &[SweepCase]) -> Option<f64> {
 impl From<&ResultSummary> for ResultView {
     fn from(r: &ResultSummary) -> Self {
         Self {
-            outcome: r.outcome.clone(),
+            outcome: r.outcome,
             reason: r.reason.clone(),
             inversion: r.inversion.as_ref().map(InversionPoint::from),
             summary: r.summary.clone(),
@@ -766,7 +778,7 @@ impl From<LogLine> for LogLineView {
 impl CaseDetail {
     /// A case with the sweeps that asked for it, its stored series (if any)
     /// and its log lines.
-    pub fn new(c: &CaseRecord, sweeps: Vec<i64>, series: Option<Value>, logs: Vec<LogLine>) -> Self {
+    pub fn new(c: &CaseRecord, sweeps: Vec<i64>, series: Option<Vec<Sample>>, logs: Vec<LogLine>) -> Self {
         let id = c.id;
         let links = BTreeMap::from([
             ("self".to_string(), format!("/api/cases/{id}")),
@@ -779,8 +791,8 @@ impl CaseDetail {
             solver_version: c.solver_version.clone(),
             params: serde_json::to_value(&c.params).expect("params serialise"),
             nodes: c.params.node_count(),
-            status: c.status().to_string(),
-            state: c.state.as_str().to_string(),
+            status: c.status(),
+            state: c.state,
             attempts: c.attempts,
             max_attempts: c.max_attempts,
             progress: c.progress,
@@ -835,11 +847,9 @@ impl PhaseDiagram {
                         uncertainty: point
                             .twin
                             .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
-                        hysteresis: summary_field(point.case, "hysteresis"),
-                        events: summary_field(point.case, "events")
-                            .and_then(|v| v.as_array().cloned())
-                            .unwrap_or_default(),
-                        quasi_static: summary_field(point.case, "quasi_static"),
+                        hysteresis: details(point.case).and_then(|d| d.hysteresis),
+                        events: details(point.case).map(|d| d.events.clone()).unwrap_or_default(),
+                        quasi_static: details(point.case).and_then(|d| d.quasi_static),
                     }
                 })
                 .collect(),
@@ -847,31 +857,15 @@ impl PhaseDiagram {
     }
 }
 
-/// A non-null field of a case's stored result summary.
-fn summary_field(case: &SweepCase, name: &str) -> Option<Value> {
-    let summary = &case.case.result.as_ref()?.summary;
-    summary.get(name).filter(|v| !v.is_null()).cloned()
-}
-
-/// Status words of cases, in the order metrics list them: the queue states
-/// before a result, the solver's outcomes, then the queue's failures.
-fn status_words() -> Vec<String> {
-    let queue = |s: CaseState| s.as_str().to_string();
-    let outcomes = Status::ALL
-        .into_iter()
-        .filter(|s| *s != Status::Cancelled)
-        .map(|s| s.to_string());
-    [queue(CaseState::Queued), queue(CaseState::Running)]
-        .into_iter()
-        .chain(outcomes)
-        .chain([queue(CaseState::Failed), queue(CaseState::Cancelled)])
-        .collect()
+/// A case's stored result details, none before its result.
+fn details(case: &SweepCase) -> Option<&ResultDetails> {
+    case.case.result.as_ref().map(|r| &r.summary)
 }
 
 /// What `/metrics` reports besides the embedded workers' own counters.
 pub struct Metrics {
-    /// Cases per status word, across every process.
-    pub cases: BTreeMap<String, i64>,
+    /// Cases per status, across every process.
+    pub cases: BTreeMap<CaseStatus, i64>,
     /// Queued cases of active sweeps.
     pub queue_depth: i64,
     /// Sweeps per status.
@@ -888,11 +882,11 @@ impl Metrics {
             out,
             "# HELP knotsweep_cases Cases by status.\n# TYPE knotsweep_cases gauge"
         );
-        for word in status_words() {
+        for status in CaseStatus::all() {
             let _ = writeln!(
                 out,
-                "knotsweep_cases{{status=\"{word}\"}} {}",
-                self.cases.get(&word).copied().unwrap_or(0)
+                "knotsweep_cases{{status=\"{status}\"}} {}",
+                self.cases.get(&status).copied().unwrap_or(0)
             );
         }
         let _ = writeln!(

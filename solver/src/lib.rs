@@ -24,6 +24,7 @@ pub mod protocol;
 pub mod rod;
 pub mod simplified;
 pub mod snapshot;
+pub mod snapshot_label;
 pub mod stepper;
 pub mod time_step;
 pub mod validation;

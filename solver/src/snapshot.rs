@@ -8,12 +8,14 @@ use crate::rod::Rod;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+pub use crate::snapshot_label::{EventWhen, SnapshotLabel, UnknownLabel};
+
 /// A centreline snapshot. The per-node fields are single precision (they
 /// are for viewing, and keep the stored report small); they and `time` are
 /// empty or zero in snapshots stored before they were recorded.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
-    pub label: String,
+    pub label: SnapshotLabel,
     pub l_k_bar: f64,
     /// Simulated time since the case started, relaxation included (s).
     #[serde(default)]
@@ -60,7 +62,7 @@ const STICK_MARGIN: f64 = 1e-6;
 
 impl Snapshot {
     /// A snapshot of the world's (first) rod at simulated time `time`.
-    pub fn capture(world: &World, label: &str, l_k_bar: f64, time: f64) -> Self {
+    pub fn capture(world: &World, label: SnapshotLabel, l_k_bar: f64, time: f64) -> Self {
         let rod = &world.rods[0];
         let points = rod.positions();
         let contacts = world
@@ -71,7 +73,7 @@ impl Snapshot {
             .map(|(c, f)| SnapshotContact::new(c, f, &points))
             .collect();
         Self {
-            label: label.to_string(),
+            label,
             l_k_bar,
             time,
             points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),

@@ -18,7 +18,7 @@ fn a_relaxed_snapshot_starts_a_case_again() {
     let relaxed = report
         .snapshots
         .iter()
-        .find(|s| s.label == "relaxed")
+        .find(|s| s.label == solver::snapshot::SnapshotLabel::Relaxed)
         .expect("a relaxed snapshot");
     let again = CaseParams {
         initial_shape: Some(relaxed.points.clone()),

@@ -49,16 +49,26 @@ export function limits() {
   return served;
 }
 
-let info = null;
+let doc = null;
+/** The OpenAPI document's schemas, fetched once. */
+function schemas() {
+  doc ??= get("/api/openapi.json").then((d) => d.components.schemas).catch((e) => {
+    doc = null;
+    throw e;
+  });
+  return doc;
+}
+
 /**
  * Each case parameter's schema (the OpenAPI document's CaseParams properties:
  * its SI unit `x-unit`, the paper's symbol `x-symbol`, description, default),
  * fetched once.
  */
-export function paramInfo() {
-  info ??= get("/api/openapi.json").then((doc) => doc.components.schemas.CaseParams.properties).catch((e) => {
-    info = null;
-    throw e;
-  });
-  return info;
-}
+export const paramInfo = () => schemas().then((s) => s.CaseParams.properties);
+
+/**
+ * The snapshot labels (the SnapshotLabel schema's `x-labels`): for each word
+ * its `description`, the `event` kind it is around (or null) and whether it
+ * is the snapshot `at_event`.
+ */
+export const snapshotLabels = () => schemas().then((s) => s.SnapshotLabel["x-labels"]);

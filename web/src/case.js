@@ -1,22 +1,11 @@
 // A case: status and reason, the knot in 3D with a slider through the stored
 // snapshots (synchronised with a cursor on the F bar / H bar plots; the
 // inversion's snapshot marked), the series and downloads.
-import { get, paramInfo } from "./api.js";
+import { get, paramInfo, snapshotLabels } from "./api.js";
 import { esc, fmt, duration, notice, $, LK, FB, HB, param } from "./util.js";
 import { overlay } from "./plot.js";
 import { KnotView } from "./knot3d.js";
 import { program, stageCurves, stageKind, direction } from "./stages.js";
-
-const LABELS = {
-  relaxed: "relaxed start",
-  pull: "pulling",
-  near_inversion: "approaching the inversion",
-  before_inversion: "just before the inversion",
-  after_inversion: "after the inversion",
-  at_inversion: "inversion",
-  final: "end of the pull",
-  failure: "where it failed",
-};
 
 /** A stage's given fields as text (" to_l_k_bar 120"), its null ones left out. */
 const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
@@ -24,9 +13,10 @@ const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
 
 export async function casePage(main, id) {
   main.innerHTML = `<p><a href="#/">← all sweeps</a> <span id="back"></span></p><h1>Case ${esc(id)}</h1><div id="case">Loading…</div>`;
-  let c, snapshots, props;
+  let c, snapshots, props, labels;
   try {
-    [c, snapshots, props] = await Promise.all([get(`/api/cases/${id}`), get(`/api/cases/${id}/snapshots`).catch(() => []), paramInfo()]);
+    [c, snapshots, props, labels] = await Promise.all([get(`/api/cases/${id}`), get(`/api/cases/${id}/snapshots`).catch(() => []), paramInfo(),
+      snapshotLabels()]);
   } catch (e) {
     notice(e.message);
     return;
@@ -41,7 +31,10 @@ export async function casePage(main, id) {
   const quasi = summary.quasi_static || null;
   const stages = program(p);
   snapshots = (snapshots || []).slice().sort((a, b) => b.l_k_bar - a.l_k_bar);
-  const invIndex = snapshots.findIndex((f) => f.label === "at_inversion");
+  // The snapshot at each event is marked; the slider starts at the first event's.
+  const about = (f) => labels[f.label] || { description: f.label, event: null, at_event: false };
+  const firstEvent = events[0];
+  const invIndex = snapshots.findIndex((f) => about(f).at_event && (!firstEvent || about(f).event === firstEvent.kind));
   $("#case").innerHTML = `
     <p><span class="status s-${esc(c.status)}">${esc(c.status)}</span>
       ${r && r.reason ? `<strong>${esc(r.reason)}</strong>` : c.last_error ? `<strong>${esc(c.last_error)}</strong>` : ""}
@@ -62,7 +55,7 @@ export async function casePage(main, id) {
         <output id="snapshot-label" for="snapshot"></output>
         <button type="button" id="reset">Reset view</button>
       </div>
-      <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${snapshots.length} stored snapshots${invIndex >= 0 ? "; the inversion's is marked ★" : ""}.
+      <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${snapshots.length} stored snapshots${snapshots.some((f) => about(f).at_event) ? "; each event's is marked ★" : ""}.
         Beads mark the loaded contacts, coloured from blue (weakest) to red (strongest force of the snapshot).</p>
     </section>
     <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
@@ -108,7 +101,7 @@ export async function casePage(main, id) {
     const contacts = fr.contacts || [];
     view.show(fr.points, contacts);
     const largest = contacts.length ? Math.max(...contacts.map((c) => c.force)) : 0;
-    $("#snapshot-label").textContent = `${Number(slider.value) + 1}/${snapshots.length}: ${LK} ${fmt(fr.l_k_bar)} (${LABELS[fr.label] || fr.label})${fr.label === "at_inversion" ? " ★" : ""}` +
+    $("#snapshot-label").textContent = `${Number(slider.value) + 1}/${snapshots.length}: ${LK} ${fmt(fr.l_k_bar)} (${about(fr).description})${about(fr).at_event ? " ★" : ""}` +
       ` · ${contacts.length} loaded contacts${contacts.length ? `, largest force ${largest.toExponential(2)} N` : ""}`;
     f?.setMarker(fr.l_k_bar);
     h?.setMarker(fr.l_k_bar);

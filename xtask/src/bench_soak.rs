@@ -11,7 +11,7 @@
 //! prints requests/s, latency percentiles and the server's RSS.
 //! BENCHMARKS.md records it.
 use anyhow::{Context, Result, bail, ensure};
-use knotsweep_worker::store::{CaseState, Heartbeat, Store, StoreOptions, open_store};
+use knotsweep_worker::store::{CaseState, CaseStatus, Heartbeat, Store, StoreOptions, open_store};
 use rand::{Rng, SeedableRng};
 use serde_json::{Value, json};
 use solver::protocol::{CaseReport, Status};
@@ -305,11 +305,7 @@ async fn drain(store: &dyn Store) -> Result<()> {
     let deadline = Instant::now() + Duration::from_secs(600);
     loop {
         let counts = store.status_counts().await?;
-        let open: i64 = counts
-            .iter()
-            .filter(|(s, _)| s == CaseState::Queued.as_str() || s == CaseState::Running.as_str())
-            .map(|(_, n)| n)
-            .sum();
+        let open: i64 = counts.iter().filter(|(s, _)| s.is_open()).map(|(_, n)| n).sum();
         if open == 0 {
             return Ok(());
         }
@@ -361,9 +357,10 @@ async fn check(
             s.mus
         );
         for c in cases {
-            let status = c["status"].as_str().unwrap_or("?");
-            let fine = status == Status::Completed.to_string()
-                || (s.cancelled && status == CaseState::Cancelled.as_str());
+            let status: CaseStatus =
+                serde_json::from_value(c["status"].clone()).context("a case's status")?;
+            let fine = status == CaseStatus::COMPLETED
+                || (s.cancelled && status == CaseStatus::Queue(CaseState::Cancelled));
             ensure!(
                 fine,
                 "sweep {} (cancelled: {}): case {} ended {status}",
@@ -373,8 +370,8 @@ async fn check(
             );
         }
     }
-    let counts: BTreeMap<String, i64> = store.status_counts().await?.into_iter().collect();
-    let stored = counts.get(&Status::Completed.to_string()).copied().unwrap_or(0) as usize;
+    let counts: BTreeMap<CaseStatus, i64> = store.status_counts().await?.into_iter().collect();
+    let stored = counts.get(&CaseStatus::COMPLETED).copied().unwrap_or(0) as usize;
     ensure!(
         stored == completions,
         "{stored} stored results for {completions} completions"

@@ -58,7 +58,7 @@ fn report_sizes(path: &Path) -> Result<String> {
     row(&mut out, "JSON text", series_json, snapshots_json);
     for choice in SnapshotChoice::ALL {
         let kept: Vec<Snapshot> = (snapshots.iter())
-            .filter(|s| choice.keeps(&s.label))
+            .filter(|s| choice.keeps(s.label))
             .cloned()
             .collect();
         let what = format!("packed, snapshots `{}` ({})", choice.as_str(), kept.len());

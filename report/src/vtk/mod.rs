@@ -137,7 +137,7 @@ mod tests {
     /// A snapshot of `n` nodes along x at `time`, with one sticking contact.
     fn snapshot(label: &str, time: f64, l_k_bar: f64, n: usize) -> Snapshot {
         Snapshot {
-            label: label.to_string(),
+            label: label.parse().expect("a snapshot label"),
             l_k_bar,
             time,
             points: (0..n).map(|i| [i as f64 * 1e-2, 0.0, 0.0]).collect(),

@@ -84,15 +84,33 @@ pub enum Direction {
     Still,
 }
 
+/// A stage's kind: its one key in a program (its word, as `Display` writes it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StageKind {
+    Pull,
+    Release,
+    Hold,
+    Rotate,
+    Soft,
+}
+
+crate::words::display_as_word!(StageKind);
+
+impl StageKind {
+    /// Every kind, in the order of [`LoadStage`]'s variants.
+    pub const ALL: [Self; 5] = [Self::Pull, Self::Release, Self::Hold, Self::Rotate, Self::Soft];
+}
+
 impl LoadStage {
-    /// The stage's one key.
-    pub fn name(&self) -> &'static str {
+    /// The stage's kind (its one key).
+    pub fn kind(&self) -> StageKind {
         match self {
-            LoadStage::Pull(_) => "pull",
-            LoadStage::Release(_) => "release",
-            LoadStage::Hold(_) => "hold",
-            LoadStage::Rotate(_) => "rotate",
-            LoadStage::Soft(_) => "soft",
+            LoadStage::Pull(_) => StageKind::Pull,
+            LoadStage::Release(_) => StageKind::Release,
+            LoadStage::Hold(_) => StageKind::Hold,
+            LoadStage::Rotate(_) => StageKind::Rotate,
+            LoadStage::Soft(_) => StageKind::Soft,
         }
     }
 
@@ -139,7 +157,7 @@ pub fn check(program: &[LoadStage], start: f64, slenderness: f64) -> Result<(), 
     }
     let mut at = Some(start);
     for (i, stage) in program.iter().enumerate() {
-        let name = format!("stage {} ({})", i + 1, stage.name());
+        let name = format!("stage {} ({})", i + 1, stage.kind());
         let bad = |what: String| Err(format!("{name}: {what}"));
         match *stage {
             LoadStage::Hold(Hold { seconds }) if !(seconds > 0.0 && seconds <= MAX_HOLD) => {
@@ -233,6 +251,22 @@ mod tests {
             serde_json::to_value(p[4]).unwrap(),
             json!({"soft": {"stiffness_bar": 100.0, "to_l_k_bar": 190.0}})
         );
+        // A stage's kind is its key, each kind once.
+        let keys: Vec<String> = (p.iter())
+            .map(|s| {
+                serde_json::to_value(s)
+                    .unwrap()
+                    .as_object()
+                    .unwrap()
+                    .keys()
+                    .next()
+                    .unwrap()
+                    .clone()
+            })
+            .collect();
+        let kinds: Vec<String> = p.iter().map(|s| s.kind().to_string()).collect();
+        assert_eq!(kinds, keys);
+        assert_eq!(kinds, StageKind::ALL.map(|k| k.to_string()));
         for bad in [
             json!([{"push": {}}]),
             json!([{"pull": {"to": 3}}]),

@@ -12,7 +12,7 @@ mod table;
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw, Geometry};
 use crate::knot::{Knot, KnotSpec, StartShape};
 use crate::words::display_as_word;
-pub use loading::{Direction, Ends, Hold, LoadStage, Rotate, Soft, Target, default_program};
+pub use loading::{Direction, Ends, Hold, LoadStage, Rotate, Soft, StageKind, Target, default_program};
 pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};

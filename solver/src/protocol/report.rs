@@ -75,6 +75,11 @@ pub enum EventKind {
     FlipBack,
 }
 
+impl EventKind {
+    /// Every kind of event.
+    pub const ALL: [Self; 2] = [Self::Inversion, Self::FlipBack];
+}
+
 /// A snap of the loop, in the stage that saw it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Event {

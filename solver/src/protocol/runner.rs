@@ -14,7 +14,7 @@ use crate::material::Material;
 use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World, WorldStepReport};
 use crate::rod::{End, Rod};
-use crate::snapshot::Snapshot;
+use crate::snapshot::{Snapshot, SnapshotLabel};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
 use nalgebra::Vector3;
@@ -313,9 +313,12 @@ impl<'a> Case<'a> {
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
         let at = self.l_k_bar();
-        self.report
-            .snapshots
-            .push(Snapshot::capture(&self.world, "relaxed", at, self.clock.elapsed));
+        self.report.snapshots.push(Snapshot::capture(
+            &self.world,
+            SnapshotLabel::Relaxed,
+            at,
+            self.clock.elapsed,
+        ));
         Ok(())
     }
 
@@ -371,9 +374,12 @@ impl<'a> Case<'a> {
             ));
         }
         let at = self.l_k_bar();
-        self.report
-            .snapshots
-            .push(Snapshot::capture(&self.world, "final", at, self.clock.elapsed));
+        self.report.snapshots.push(Snapshot::capture(
+            &self.world,
+            SnapshotLabel::Final,
+            at,
+            self.clock.elapsed,
+        ));
         Ok(())
     }
 
@@ -571,9 +577,12 @@ impl<'a> Case<'a> {
             report.hysteresis = None;
             let r = &world.rods[0];
             let at = (report.params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / report.params.h;
-            report
-                .snapshots
-                .push(Snapshot::capture(&world, "failure", at, clock.elapsed));
+            report.snapshots.push(Snapshot::capture(
+                &world,
+                SnapshotLabel::Failure,
+                at,
+                clock.elapsed,
+            ));
         }
         report.stats.rejected_steps = clock.rejected;
         report.stats.smallest_dt = clock.smallest;

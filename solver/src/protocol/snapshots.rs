@@ -6,7 +6,7 @@
 use super::adaptive::Way;
 use super::report::{Event, EventKind};
 use super::runner::{Case, SNAPSHOT_HISTORY};
-use crate::snapshot::Snapshot;
+use crate::snapshot::{EventWhen, Snapshot, SnapshotLabel};
 
 const SNAPSHOT_SPACING: f64 = 20.0;
 const EVENT_SPACING: f64 = 2.0;
@@ -43,7 +43,7 @@ impl Case<'_> {
         }
         history.push_back(Snapshot::capture(
             &self.world,
-            "sample",
+            SnapshotLabel::Sample,
             l_k_bar,
             self.clock.elapsed,
         ));
@@ -52,10 +52,9 @@ impl Case<'_> {
             self.event_snapshots(plan, event.kind, event.at.l_k_bar);
         } else if let Some((kind, next, end)) = plan.after_event {
             if way.reached(l_k_bar, next) && !way.past(l_k_bar, end) {
-                let label = format!("after_{kind}");
                 self.report.snapshots.push(Snapshot::capture(
                     &self.world,
-                    &label,
+                    SnapshotLabel::Event(EventWhen::After, kind),
                     l_k_bar,
                     self.clock.elapsed,
                 ));
@@ -63,7 +62,7 @@ impl Case<'_> {
             }
         }
         if way.reached(l_k_bar, plan.next) {
-            let label = self.program[self.stage].name();
+            let label = SnapshotLabel::Stage(self.program[self.stage].kind());
             self.report
                 .snapshots
                 .push(Snapshot::capture(&self.world, label, l_k_bar, self.clock.elapsed));
@@ -79,13 +78,13 @@ impl Case<'_> {
         let mut offset = EVENT_WINDOW;
         while offset >= -EVENT_WINDOW {
             let when = if offset == 0.0 {
-                "at"
+                EventWhen::At
             } else if offset == EVENT_SPACING {
-                "before"
+                EventWhen::Before
             } else if offset > 0.0 {
-                "near"
+                EventWhen::Near
             } else {
-                "after"
+                EventWhen::After
             };
             let target = way.back(at, offset);
             let distance = |f: &Snapshot| (f.l_k_bar - target).abs();
@@ -96,7 +95,7 @@ impl Case<'_> {
                 if !stored.contains(&f.l_k_bar) {
                     stored.push(f.l_k_bar);
                     self.report.snapshots.push(Snapshot {
-                        label: format!("{when}_{kind}"),
+                        label: SnapshotLabel::Event(when, kind),
                         ..f.clone()
                     });
                 }

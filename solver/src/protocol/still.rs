@@ -88,7 +88,7 @@ impl Case<'_> {
             }
         }
         let at = self.l_k_bar();
-        let label = self.program[self.stage].name();
+        let label = crate::snapshot::SnapshotLabel::Stage(self.program[self.stage].kind());
         self.report
             .snapshots
             .push(Snapshot::capture(&self.world, label, at, self.clock.elapsed));

@@ -19,21 +19,26 @@
 //! - a solver failure (diverged, topology changed, ...) is a result, not a retry.
 pub mod codec;
 pub mod postgres;
+mod result;
 mod rows;
 mod sql;
 pub mod sqlite;
+mod status;
 #[cfg(test)]
 mod testing;
 
 use async_trait::async_trait;
 use serde::{Deserialize, Serialize};
 use solver::case::CaseParams;
-use solver::measurements::Inversion;
+use solver::measurements::Sample;
 use solver::protocol::{CaseReport, Progress};
+use solver::snapshot::{Snapshot, SnapshotLabel};
 use std::ops::RangeInclusive;
 use std::time::Duration;
 
+pub use result::{ResultDetails, ResultSummary};
 pub use sql::{Backend, SqlStore};
+pub use status::{CaseState, CaseStatus, SweepState};
 
 /// Errors of the store.
 #[derive(Debug, thiserror::Error)]
@@ -44,6 +49,23 @@ pub enum StoreError {
     Migrate(#[from] sqlx::migrate::MigrateError),
     #[error("stored data is corrupt: {0}")]
     Corrupt(String),
+    /// A stored JSON value that does not read as its type.
+    #[error("stored {what} does not read: {source}")]
+    Json {
+        what: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A packed column that does not decode.
+    #[error("stored {column} does not decode: {source}")]
+    Codec {
+        column: &'static str,
+        #[source]
+        source: codec::CodecError,
+    },
+    /// A stored word that names none of its kind's values.
+    #[error("stored {what} {word:?} is none of its words")]
+    UnknownWord { what: &'static str, word: String },
     #[error("not found")]
     NotFound,
     #[error("{0}")]
@@ -57,6 +79,16 @@ pub enum StoreError {
 }
 
 pub type StoreResult<T> = Result<T, StoreError>;
+
+impl StoreError {
+    /// `word`, stored as a `what`, names none.
+    pub(crate) fn word(what: &'static str, word: &str) -> Self {
+        Self::UnknownWord {
+            what,
+            word: word.to_string(),
+        }
+    }
+}
 
 /// Retry policy for infrastructure failures (lost workers, panics, storage
 /// errors while completing): exponential backoff with jitter, at most
@@ -93,76 +125,6 @@ impl RetryPolicy {
     }
 }
 
-/// State of a sweep.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SweepState {
-    /// Its cases are handed out to workers.
-    Active,
-    /// Its queued cases are not handed out; running ones no active sweep
-    /// wants are handed back to the queue at their next heartbeat.
-    Paused,
-    /// Terminal: queued cases no other sweep wants are cancelled, running ones
-    /// stop at their next heartbeat.
-    Cancelled,
-}
-
-impl SweepState {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Active => "active",
-            Self::Paused => "paused",
-            Self::Cancelled => "cancelled",
-        }
-    }
-    pub fn parse(s: &str) -> StoreResult<Self> {
-        match s {
-            "active" => Ok(Self::Active),
-            "paused" => Ok(Self::Paused),
-            "cancelled" => Ok(Self::Cancelled),
-            other => Err(StoreError::Corrupt(format!("sweep state {other:?}"))),
-        }
-    }
-}
-
-/// Queue state of a case.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CaseState {
-    Queued,
-    Running,
-    /// Has a result (whatever the solver's status).
-    Done,
-    /// Infrastructure failures exhausted its attempts.
-    Failed,
-    Cancelled,
-}
-
-impl CaseState {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Queued => "queued",
-            Self::Running => "running",
-            Self::Done => "done",
-            Self::Failed => "failed",
-            Self::Cancelled => "cancelled",
-        }
-    }
-    pub fn parse(s: &str) -> StoreResult<Self> {
-        match s {
-            "queued" => Ok(Self::Queued),
-            "running" => Ok(Self::Running),
-            "done" => Ok(Self::Done),
-            "failed" => Ok(Self::Failed),
-            "cancelled" => Ok(Self::Cancelled),
-            other => Err(StoreError::Corrupt(format!("case status {other:?}"))),
-        }
-    }
-    pub fn is_terminal(self) -> bool {
-        matches!(self, Self::Done | Self::Failed | Self::Cancelled)
-    }
-}
-
 /// Which of a result's snapshots the store keeps, chosen per sweep. A case
 /// that several sweeps asked for keeps the most of their choices (`all` over
 /// `events` over `none`); a case already done when a sweep asks for it keeps
@@ -194,22 +156,16 @@ impl SnapshotChoice {
     }
 
     pub fn parse(s: &str) -> StoreResult<Self> {
-        match s {
-            "none" => Ok(Self::None),
-            "events" => Ok(Self::Events),
-            "all" => Ok(Self::All),
-            other => Err(StoreError::Corrupt(format!("snapshot choice {other:?}"))),
-        }
+        (Self::ALL.into_iter())
+            .find(|choice| choice.as_str() == s)
+            .ok_or_else(|| StoreError::word("snapshot choice", s))
     }
 
     /// Whether a snapshot labelled `label` is kept.
-    pub fn keeps(self, label: &str) -> bool {
-        use solver::protocol::EventKind;
+    pub fn keeps(self, label: SnapshotLabel) -> bool {
         match self {
             Self::None => false,
-            Self::Events => [EventKind::Inversion, EventKind::FlipBack]
-                .iter()
-                .any(|kind| label.ends_with(&format!("_{kind}"))),
+            Self::Events => label.event().is_some(),
             Self::All => true,
         }
     }
@@ -323,28 +279,14 @@ pub struct CaseRecord {
 }
 
 impl CaseRecord {
-    /// The one status word of the API: the solver's status when the case has a
+    /// The one status of the API: the solver's status when the case has a
     /// result, otherwise the queue state.
-    pub fn status(&self) -> &str {
+    pub fn status(&self) -> CaseStatus {
         match &self.result {
-            Some(r) => &r.outcome,
-            None => self.state.as_str(),
+            Some(r) => CaseStatus::Result(r.outcome),
+            None => CaseStatus::Queue(self.state),
         }
     }
-}
-
-/// The small part of a result.
-#[derive(Clone, Debug)]
-pub struct ResultSummary {
-    /// The solver's status (snake_case).
-    pub outcome: String,
-    pub reason: String,
-    pub inversion: Option<Inversion>,
-    /// Determinants and stats (JSON object).
-    pub summary: serde_json::Value,
-    pub wall_time: f64,
-    pub worker: String,
-    pub created_at: i64,
 }
 
 /// A case as a member of a sweep.
@@ -417,8 +359,8 @@ pub enum SweepAction {
     Cancel,
 }
 
-/// Count of cases per status word (see [`CaseRecord::status`]).
-pub type StatusCounts = Vec<(String, i64)>;
+/// Count of cases per status (see [`CaseRecord::status`]), in word order.
+pub type StatusCounts = Vec<(CaseStatus, i64)>;
 
 /// Everything done with the queue. Every method is short: no transaction stays
 /// open across calls, and none across a computation.
@@ -435,8 +377,10 @@ pub trait Store: Send + Sync + 'static {
     async fn list_sweeps(&self, limit: i64, offset: i64) -> StoreResult<Vec<SweepRecord>>;
     async fn count_sweeps(&self) -> StoreResult<i64>;
     async fn get_sweep(&self, id: i64) -> StoreResult<Option<SweepRecord>>;
-    /// Per-sweep counts by status word, for the sweeps whose id is in `ids`.
-    async fn sweep_status_counts(&self, ids: RangeInclusive<i64>) -> StoreResult<Vec<(i64, String, i64)>>;
+    /// Per-sweep counts by status, for the sweeps whose id is in `ids`
+    /// (by sweep, then status word).
+    async fn sweep_status_counts(&self, ids: RangeInclusive<i64>)
+    -> StoreResult<Vec<(i64, CaseStatus, i64)>>;
     /// The sweep's cases in grid order, with result summaries.
     async fn sweep_cases(&self, id: i64) -> StoreResult<Vec<SweepCase>>;
     /// Pause (its running cases no active sweep wants are handed back to the
@@ -455,11 +399,11 @@ pub trait Store: Send + Sync + 'static {
     async fn get_case(&self, id: i64) -> StoreResult<Option<CaseRecord>>;
     /// Ids of the sweeps that asked for a case.
     async fn case_sweeps(&self, id: i64) -> StoreResult<Vec<i64>>;
-    /// The series of a case's result (JSON array of samples): decoded from
-    /// its packed form, or the JSON text of a result stored before it.
-    async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>>;
-    /// The snapshots of a case's result (JSON array), likewise.
-    async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>>;
+    /// The series of a case's result, `None` before it: decoded from its
+    /// packed form, or read from the JSON text of a result stored before it.
+    async fn case_series(&self, id: i64) -> StoreResult<Option<Vec<Sample>>>;
+    /// The snapshots of a case's result, likewise.
+    async fn case_snapshots(&self, id: i64) -> StoreResult<Option<Vec<Snapshot>>>;
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>>;
     async fn append_log(&self, case_id: i64, level: &str, message: &str) -> StoreResult<()>;
 

@@ -2,7 +2,7 @@
 //! four column types (integer, real, text, bytes), read through [`Columns`].
 use super::codec::{self, CodecError};
 use super::*;
-use solver::snapshot::Snapshot;
+use solver::protocol::Status;
 use sqlx::Row;
 use sqlx::any::AnyRow;
 
@@ -58,7 +58,20 @@ pub(crate) const ACTIVELY_WANTED: &str = "EXISTS (SELECT 1 FROM sweep_cases w JO
     WHERE w.case_id = c.id AND ws.state = 'active')";
 
 pub(crate) fn json<T: serde::de::DeserializeOwned>(text: &str, what: &str) -> StoreResult<T> {
-    serde_json::from_str(text).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
+    serde_json::from_str(text).map_err(|source| StoreError::Json {
+        what: what.to_string(),
+        source,
+    })
+}
+
+/// The solver's status stored as `word`.
+fn outcome(word: &str) -> StoreResult<Status> {
+    serde_json::from_value(serde_json::Value::from(word)).map_err(|_| StoreError::word("outcome", word))
+}
+
+/// A case's status as a query counts it (`COALESCE(r.outcome, c.status)`).
+pub(crate) fn status_from_row(r: &AnyRow, column: &str) -> StoreResult<CaseStatus> {
+    CaseStatus::parse(&r.text(column)?)
 }
 
 pub(crate) fn sweep_from_row(r: &AnyRow) -> StoreResult<SweepRecord> {
@@ -91,8 +104,8 @@ pub(crate) fn claim_from_row(r: &AnyRow, owner: &str) -> StoreResult<Claim> {
 pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     let result = match r.text_or_null("outcome")? {
         None => None,
-        Some(outcome) => Some(ResultSummary {
-            outcome,
+        Some(word) => Some(ResultSummary {
+            outcome: outcome(&word)?,
             reason: r.text("reason")?,
             inversion: r
                 .text_or_null("inversion")?
@@ -135,9 +148,10 @@ pub(crate) fn case_from_row(r: &AnyRow) -> StoreResult<CaseRecord> {
     })
 }
 
-/// What a completed report stores: outcome word, summary and inversion (JSON
-/// text), the packed series, and the log line. The snapshots are packed by
-/// [`packed_snapshots`] once the sweeps' choice is known.
+/// What a completed report stores: outcome word, summary ([`ResultDetails`])
+/// and inversion (JSON text), the packed series, and the log line. The
+/// snapshots are packed by [`packed_snapshots`] once the sweeps' choice is
+/// known.
 pub(crate) struct StoredResult {
     pub outcome: String,
     pub summary: String,
@@ -149,22 +163,13 @@ pub(crate) struct StoredResult {
 impl StoredResult {
     /// `Conflict` for a cancelled run, which is not a result.
     pub(crate) fn new(report: &CaseReport, worker: &str) -> StoreResult<Self> {
-        use solver::protocol::Status;
         if report.status == Status::Cancelled {
             return Err(StoreError::Conflict(
                 "a cancelled run is not a result".to_string(),
             ));
         }
         let outcome = report.status.to_string();
-        let summary = serde_json::json!({
-            "determinant_initial": report.determinant_initial,
-            "determinant_final": report.determinant_final,
-            "stats": report.stats,
-            "events": report.events,
-            "hysteresis": report.hysteresis,
-            "quasi_static": report.quasi_static,
-            "scaling": report.scaling,
-        });
+        let summary = ResultDetails::from(report);
         let wall = report.stats.wall_time;
         let message = match (&report.inversion, report.reason.is_empty()) {
             (Some(inv), _) => format!(
@@ -176,7 +181,7 @@ impl StoredResult {
         };
         Ok(Self {
             outcome,
-            summary: summary.to_string(),
+            summary: serde_json::to_string(&summary).expect("a summary serialises"),
             series: codec::pack_series(&report.series),
             inversion: report
                 .inversion
@@ -189,25 +194,27 @@ impl StoredResult {
 /// The snapshots `choice` keeps, packed.
 pub(crate) fn packed_snapshots(snapshots: &[Snapshot], choice: SnapshotChoice) -> Vec<u8> {
     let kept: Vec<Snapshot> = (snapshots.iter())
-        .filter(|s| choice.keeps(&s.label))
+        .filter(|s| choice.keeps(s.label))
         .cloned()
         .collect();
     codec::pack_snapshots(&kept)
 }
 
-/// A series or snapshots column pair as the API serves it: the packed bytes
-/// decoded and written as JSON, or the JSON text of a row stored before the
-/// packed columns, as stored.
-pub(crate) fn served_json(row: &AnyRow, what: Packed) -> StoreResult<String> {
+/// A series or snapshots column pair, typed: the packed bytes decoded by
+/// `unpack`, or the JSON text of a row stored before the packed columns read
+/// (under the report's aliases for older names).
+pub(crate) fn stored_values<T: serde::de::DeserializeOwned>(
+    row: &AnyRow,
+    what: Packed,
+    unpack: fn(&[u8]) -> Result<T, CodecError>,
+) -> StoreResult<T> {
     let (text, packed) = what.columns();
-    let corrupt = |e: CodecError| StoreError::Corrupt(format!("{text}: {e}"));
     match (row.bytes_or_null(packed)?, row.text_or_null(text)?) {
-        (Some(bytes), _) => Ok(match what {
-            Packed::Series => serde_json::to_string(&codec::unpack_series(&bytes).map_err(corrupt)?),
-            Packed::Snapshots => serde_json::to_string(&codec::unpack_snapshots(&bytes).map_err(corrupt)?),
-        }
-        .expect("decoded values serialise")),
-        (None, Some(json)) => Ok(json),
+        (Some(bytes), _) => unpack(&bytes).map_err(|source| StoreError::Codec {
+            column: packed,
+            source,
+        }),
+        (None, Some(stored)) => json(&stored, text),
         (None, None) => Err(StoreError::Corrupt(format!("a result without its {text}"))),
     }
 }

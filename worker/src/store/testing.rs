@@ -5,7 +5,10 @@
 use super::postgres::PgStore;
 use super::sqlite::{SqliteOptions, SqliteStore};
 use super::*;
-use solver::protocol::Status;
+use solver::case::{Direction, StageKind};
+use solver::measurements::Inversion;
+use solver::protocol::{Event, EventKind, Hysteresis, QuasiStatic, Scaling, Stats, Status};
+use solver::snapshot::{EventWhen, SnapshotLabel};
 
 const LEASE: Duration = Duration::from_secs(30);
 
@@ -190,13 +193,10 @@ pub(crate) async fn sweeps(store: &dyn Store) {
     let counts = store.sweep_status_counts(a.id..=b.id).await.unwrap();
     assert_eq!(
         counts,
-        vec![
-            (a.id, CaseState::Queued.as_str().to_string(), 3),
-            (b.id, CaseState::Queued.as_str().to_string(), 2)
-        ]
+        vec![(a.id, CaseStatus::QUEUED, 3), (b.id, CaseStatus::QUEUED, 2)]
     );
     let only_b = store.sweep_status_counts(b.id..=b.id).await.unwrap();
-    assert_eq!(only_b, vec![(b.id, CaseState::Queued.as_str().to_string(), 2)]);
+    assert_eq!(only_b, vec![(b.id, CaseStatus::QUEUED, 2)]);
 
     let idem = |hash: &str| {
         let mut s = sweep(&[0.5]);
@@ -347,10 +347,78 @@ pub(crate) async fn claims(store: &dyn Store) {
     );
 }
 
+/// An inversion whose every field holds a value of its own.
+fn inversion(l_k_bar: f64) -> Inversion {
+    Inversion {
+        l_k_bar,
+        l_k_arc_bar: l_k_bar - 0.5,
+        l_c_over_l: 0.375,
+        f_bar_before: 2.25,
+        f_bar_after: 1.125,
+        h_bar_before: 0.625,
+        h_bar_after: 0.25,
+        kinetic_energy_ratio: 40.5,
+        sample: 17,
+    }
+}
+
+/// A completed report with everything its summary holds: events, the
+/// hysteresis, the quasi-staticity, the scaling and the statistics.
+fn full_report(params: CaseParams) -> CaseReport {
+    let event = |stage, direction, kind, at| Event {
+        stage,
+        direction,
+        kind,
+        at,
+        clean: true,
+        restarts: 1,
+    };
+    CaseReport {
+        inversion: Some(inversion(120.5)),
+        events: vec![
+            event(0, Direction::Tighten, EventKind::Inversion, inversion(120.5)),
+            event(1, Direction::Loosen, EventKind::FlipBack, inversion(160.25)),
+        ],
+        hysteresis: Some(Hysteresis {
+            inversion_l_k_bar: 120.5,
+            flip_back_l_k_bar: 160.25,
+            width: 39.75,
+        }),
+        quasi_static: Some(QuasiStatic {
+            kinetic_ratio: 1e-4,
+            limit: 5e-3,
+            holds: true,
+        }),
+        scaling: Some(Scaling {
+            time_step: 1e-6,
+            mass_scale: 1.0,
+            time_unit: 1.0,
+            pull_rate: 7.1e-5,
+            simulated_pull_rate: 7.1e-5,
+        }),
+        stats: Stats {
+            steps: 1234,
+            newton_iterations: 4321,
+            contact_sweeps: 99,
+            relax_steps: 10,
+            restarts: 1,
+            rejected_steps: 2,
+            smallest_dt: 5e-7,
+            wall_time: 1.5,
+            detection_time: 0.25,
+            contact_time: 0.5,
+            dynamics_time: 0.625,
+        },
+        reason: String::new(),
+        ..report(params, Status::Completed)
+    }
+}
+
 /// Results: stored once, only under the current lease; a cancelled run is not
-/// a result; the stored series, snapshots, log line and counts read back.
+/// a result; the stored outcome, summary, series, snapshots, log line and
+/// counts read back typed as they were written.
 pub(crate) async fn results(store: &dyn Store) {
-    let s = create(store, sweep(&[0.1])).await;
+    let s = create(store, sweep(&[0.1, 0.2])).await;
     let claim = store.claim("w1", LEASE).await.unwrap().expect("a queued case");
     let id = claim.lease.case_id;
     let cancelled = report(claim.params.clone(), Status::Cancelled);
@@ -359,7 +427,7 @@ pub(crate) async fn results(store: &dyn Store) {
         Err(StoreError::Conflict(_))
     ));
     assert_eq!(case(store, id).await.state, CaseState::Running);
-    let done = report(claim.params.clone(), Status::Completed);
+    let done = full_report(claim.params.clone());
     let stale = Lease {
         owner: "w0".to_string(),
         ..claim.lease.clone()
@@ -369,16 +437,23 @@ pub(crate) async fn results(store: &dyn Store) {
     assert!(!store.complete(&claim.lease, &done).await.unwrap(), "stored once");
 
     let c = case(store, id).await;
-    assert_eq!((c.state, c.status()), (CaseState::Done, "completed"));
+    assert_eq!((c.state, c.status()), (CaseState::Done, CaseStatus::COMPLETED));
     let result = c.result.expect("a result");
     assert_eq!(result.worker, "w1");
-    assert_eq!(result.summary["determinant_final"], 7);
-    assert_eq!(store.case_series_json(id).await.unwrap().as_deref(), Some("[]"));
     assert_eq!(
-        store.case_snapshots_json(id).await.unwrap().as_deref(),
-        Some("[]")
+        (result.outcome, result.inversion, result.wall_time),
+        (Status::Completed, done.inversion, 1.5)
     );
-    assert_eq!(store.case_series_json(id + 100).await.unwrap(), None);
+    assert_eq!(
+        result.summary,
+        ResultDetails::from(&done),
+        "the summary reads back typed"
+    );
+    assert_eq!(result.summary.events, done.events);
+    assert_eq!(store.case_series(id).await.unwrap(), Some(Vec::new()));
+    assert_eq!(store.case_snapshots(id).await.unwrap(), Some(Vec::new()));
+    assert_eq!(store.case_series(id + 100).await.unwrap(), None);
+    assert_eq!(store.case_snapshots(id + 100).await.unwrap(), None);
     assert_eq!(store.case_sweeps(id).await.unwrap(), vec![s.id]);
     assert!(
         last_log(store, id)
@@ -387,16 +462,42 @@ pub(crate) async fn results(store: &dyn Store) {
     );
     store.append_log(id, "warn", "a note").await.unwrap();
     assert_eq!(last_log(store, id).await, "a note");
+
+    // A solver failure is a result with its status and reason.
+    let other = store.claim("w2", LEASE).await.unwrap().expect("the second case");
+    let diverged = CaseReport {
+        reason: "the step failed at dt 1e-9".to_string(),
+        ..report(other.params.clone(), Status::Diverged)
+    };
+    assert!(store.complete(&other.lease, &diverged).await.unwrap());
+    let c = case(store, other.lease.case_id).await;
+    assert_eq!(c.status(), CaseStatus::Result(Status::Diverged));
+    let result = c.result.expect("a result");
+    assert_eq!(
+        (result.outcome, result.reason.as_str()),
+        (Status::Diverged, "the step failed at dt 1e-9")
+    );
+    assert_eq!(result.summary, ResultDetails::from(&diverged));
     assert_eq!(
         store.status_counts().await.unwrap(),
-        vec![("completed".to_string(), 1)]
+        vec![
+            (CaseStatus::COMPLETED, 1),
+            (CaseStatus::Result(Status::Diverged), 1)
+        ]
+    );
+    assert_eq!(
+        store.sweep_status_counts(s.id..=s.id).await.unwrap(),
+        vec![
+            (s.id, CaseStatus::COMPLETED, 1),
+            (s.id, CaseStatus::Result(Status::Diverged), 1)
+        ]
     );
 }
 
 /// A snapshot labelled `label` of a two-node rod.
-fn snapshot(label: &str, l_k_bar: f64) -> solver::snapshot::Snapshot {
+fn snapshot(label: SnapshotLabel, l_k_bar: f64) -> solver::snapshot::Snapshot {
     solver::snapshot::Snapshot {
-        label: label.to_string(),
+        label,
         l_k_bar,
         time: l_k_bar / 100.0,
         points: vec![[0.0, 0.0, 0.0], [0.5, 0.25, -0.125]],
@@ -408,19 +509,19 @@ fn snapshot(label: &str, l_k_bar: f64) -> solver::snapshot::Snapshot {
 }
 
 /// Labels a report's snapshots take: the start, stage names and events.
-const LABELS: [&str; 7] = [
-    "relaxed",
-    "pull",
-    "near_inversion",
-    "at_inversion",
-    "after_inversion",
-    "before_flip_back",
-    "final",
+const LABELS: [SnapshotLabel; 7] = [
+    SnapshotLabel::Relaxed,
+    SnapshotLabel::Stage(StageKind::Pull),
+    SnapshotLabel::Event(EventWhen::Near, EventKind::Inversion),
+    SnapshotLabel::Event(EventWhen::At, EventKind::Inversion),
+    SnapshotLabel::Event(EventWhen::After, EventKind::Inversion),
+    SnapshotLabel::Event(EventWhen::Before, EventKind::FlipBack),
+    SnapshotLabel::Final,
 ];
 
-/// Packed results: the series comes back bit for bit (the same JSON as the
-/// report's), the snapshots within the codec's bounds (exact on these
-/// values), and each sweep's snapshot choice is honoured: the most of the
+/// Packed results: the series comes back bit for bit, the snapshots within
+/// the codec's bounds (exact on these values), and each sweep's snapshot
+/// choice is honoured: the most of the
 /// choices of the sweeps that asked for a case.
 pub(crate) async fn packed_results(store: &dyn Store) {
     let chosen = |mus: &[f64], snapshots| NewSweep {
@@ -445,45 +546,38 @@ pub(crate) async fn packed_results(store: &dyn Store) {
         let done = CaseReport {
             series: series.clone(),
             snapshots: (LABELS.iter().enumerate())
-                .map(|(i, label)| snapshot(label, i as f64))
+                .map(|(i, label)| snapshot(*label, i as f64))
                 .collect(),
             ..report(claim.params.clone(), Status::Completed)
         };
         assert!(store.complete(&claim.lease, &done).await.unwrap());
         let id = claim.lease.case_id;
-        let json = store.case_series_json(id).await.unwrap().expect("a series");
-        assert_eq!(json, serde_json::to_string(&series).unwrap(), "lossless series");
-        let json = store.case_snapshots_json(id).await.unwrap().expect("snapshots");
-        let snapshots: Vec<solver::snapshot::Snapshot> = serde_json::from_str(&json).unwrap();
-        let labels: Vec<String> = snapshots.iter().map(|s| s.label.clone()).collect();
+        let back = store.case_series(id).await.unwrap().expect("a series");
+        let bits = |s: &[solver::measurements::Sample]| {
+            s.iter()
+                .map(|s| (s.time.to_bits(), s.l_k_bar.to_bits(), s.f_bar.to_bits()))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!((&back, bits(&back)), (&series, bits(&series)), "lossless series");
+        let snapshots = store.case_snapshots(id).await.unwrap().expect("snapshots");
+        let labels: Vec<SnapshotLabel> = snapshots.iter().map(|s| s.label).collect();
         for s in &snapshots {
             let i = LABELS.iter().position(|l| *l == s.label).unwrap();
-            assert_eq!(*s, snapshot(&s.label, i as f64), "exact on these values");
+            assert_eq!(*s, snapshot(s.label, i as f64), "exact on these values");
         }
         kept.push((claim.params.mu, labels));
     }
     kept.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let events = [
-        "near_inversion",
-        "at_inversion",
-        "after_inversion",
-        "before_flip_back",
-    ];
-    let expected: [(f64, Vec<&str>); 4] = [
+    let events = LABELS[2..6].to_vec();
+    let expected: [(f64, Vec<SnapshotLabel>); 4] = [
         (0.1, LABELS.to_vec()),
-        (0.2, events.to_vec()),
+        (0.2, events.clone()),
         (0.3, Vec::new()),
-        (0.4, events.to_vec()),
+        (0.4, events),
     ];
     assert_eq!(kept.len(), 4);
     for ((mu, labels), (expected_mu, expected_labels)) in kept.iter().zip(expected) {
-        assert_eq!(
-            (*mu, labels.clone()),
-            (
-                expected_mu,
-                expected_labels.iter().map(|l| l.to_string()).collect()
-            )
-        );
+        assert_eq!((*mu, labels.clone()), (expected_mu, expected_labels));
     }
 }
 
@@ -551,23 +645,45 @@ pub(crate) async fn write_old_result(pool: &sqlx::AnyPool) -> i64 {
 }
 
 /// The result [`write_old_result`] wrote, read through the migrated store:
-/// served as stored.
+/// its JSON text read as the report's types (older names under today's).
 pub(crate) async fn read_old_result(store: &dyn Store, id: i64) {
     let c = case(store, id).await;
-    assert_eq!((c.state, c.status()), (CaseState::Done, "completed"));
-    assert_eq!(c.result.expect("a result").worker, "w-old");
+    assert_eq!((c.state, c.status()), (CaseState::Done, CaseStatus::COMPLETED));
+    let result = c.result.expect("a result");
+    assert_eq!(result.worker, "w-old");
     assert_eq!(
-        store.case_series_json(id).await.unwrap().as_deref(),
-        Some(OLD_SERIES)
+        result.summary,
+        ResultDetails {
+            determinant_final: Some(7),
+            ..ResultDetails::default()
+        },
+        "a summary stored before its later fields reads them empty"
     );
+    let series = store.case_series(id).await.unwrap().expect("a series");
+    assert_eq!(series.len(), 1);
     assert_eq!(
-        store.case_snapshots_json(id).await.unwrap().as_deref(),
-        Some(OLD_SNAPSHOTS)
+        (
+            series[0].l_k_bar,
+            series[0].f_bar,
+            series[0].force,
+            series[0].contacts,
+            series[0].l_c_over_l
+        ),
+        (190.5, 2.5, 0.01, 3, 0.4),
+        "the old names read"
     );
-    let series: Vec<solver::measurements::Sample> = serde_json::from_str(OLD_SERIES).unwrap();
+    let snapshots = store.case_snapshots(id).await.unwrap().expect("snapshots");
+    assert_eq!(snapshots.len(), 1);
     assert_eq!(
-        (series[0].f_bar, series[0].contacts),
-        (2.5, 3),
-        "the report reads it"
+        (
+            snapshots[0].label,
+            snapshots[0].l_k_bar,
+            snapshots[0].points.clone()
+        ),
+        (
+            SnapshotLabel::Event(EventWhen::At, EventKind::Inversion),
+            120.0,
+            vec![[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]
+        )
     );
 }

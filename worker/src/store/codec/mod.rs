@@ -29,6 +29,6 @@ pub enum CodecError {
     Trailing(usize),
     #[error("inflating: {0}")]
     Inflate(std::io::Error),
-    #[error("a snapshot label is not UTF-8")]
+    #[error("a snapshot label is not UTF-8 or no label's word")]
     Label,
 }

@@ -4,7 +4,7 @@
 //!
 //! | field | stored as | comes back within |
 //! | --- | --- | --- |
-//! | `label`, `l_k_bar`, `time` | UTF-8, f64 | exact |
+//! | `label` (its word), `l_k_bar`, `time` | UTF-8, f64 | exact |
 //! | `points` (m) | f32 of each coordinate's displacement from the previous snapshot as decoded (from 0 for the first snapshot and after a change of node count) | 2^-24 of that displacement (plus f64 rounding): errors do not accumulate |
 //! | `twist_rate`, `curvature`, `velocity` | f16 of each value over the snapshot's largest magnitude of the field (an f32) | 2^-11 of the value plus 2^-24 of that largest magnitude |
 //! | `contacts`: `a`, `b`, `force`, `normal_force`, `friction_force` | f32 | 2^-24 of the value (f32 rounding) |
@@ -15,7 +15,7 @@
 use super::CodecError;
 use super::planes::{Packer, Unpacker};
 use half::f16;
-use solver::snapshot::{Snapshot, SnapshotContact};
+use solver::snapshot::{Snapshot, SnapshotContact, SnapshotLabel};
 
 /// The packed form's format byte.
 const FORMAT: u8 = 1;
@@ -24,8 +24,9 @@ const FORMAT: u8 = 1;
 pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
     let mut p = Packer::default();
     p.u32s([snapshots.len() as u32]);
-    let lengths: [fn(&Snapshot) -> usize; 6] = [
-        |s| s.label.len(),
+    let labels: Vec<String> = snapshots.iter().map(|s| s.label.to_string()).collect();
+    p.u32s(labels.iter().map(|l| l.len() as u32));
+    let lengths: [fn(&Snapshot) -> usize; 5] = [
         |s| s.points.len(),
         |s| s.twist_rate.len(),
         |s| s.curvature.len(),
@@ -35,8 +36,8 @@ pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
     for length in lengths {
         p.u32s(snapshots.iter().map(|s| length(s) as u32));
     }
-    for s in snapshots {
-        p.bytes(s.label.as_bytes());
+    for label in &labels {
+        p.bytes(label.as_bytes());
     }
     p.f64s(snapshots.iter().map(|s| s.l_k_bar));
     p.f64s(snapshots.iter().map(|s| s.time));
@@ -90,8 +91,8 @@ pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
     ] = <[Vec<usize>; 6]>::try_from(lengths).expect("six arrays");
     let mut labels = Vec::with_capacity(n);
     for &len in &label_len {
-        let bytes = u.bytes(len)?.to_vec();
-        labels.push(String::from_utf8(bytes).map_err(|_| CodecError::Label)?);
+        let word = std::str::from_utf8(u.bytes(len)?).map_err(|_| CodecError::Label)?;
+        labels.push(SnapshotLabel::parse(word).map_err(|_| CodecError::Label)?);
     }
     let l_k_bar = u.f64s(n)?;
     let time = u.f64s(n)?;
@@ -223,7 +224,7 @@ mod tests {
         (1usize..30).prop_flat_map(|nodes| {
             prop::collection::vec(
                 (
-                    "[a-z_]{0,20}",
+                    prop::sample::select(SnapshotLabel::all()),
                     -500.0f64..500.0,
                     0.0f64..100.0,
                     prop::collection::vec(prop::array::uniform3(-0.5f64..0.5), nodes),
@@ -321,9 +322,9 @@ mod tests {
     }
 
     #[test]
-    fn a_label_that_is_not_utf8_is_an_error() {
+    fn a_label_that_is_not_utf8_or_no_labels_word_is_an_error() {
         let shot = Snapshot {
-            label: "at_inversion".to_string(),
+            label: SnapshotLabel::parse("at_inversion").unwrap(),
             l_k_bar: 0.0,
             time: 0.0,
             points: Vec::new(),
@@ -344,5 +345,14 @@ mod tests {
             unpack_snapshots(&p.finish(FORMAT)),
             Err(CodecError::Label)
         ));
+        // A word that is no label's (the label's bytes are read first).
+        let mut p = Packer::default();
+        p.u32s([1]);
+        for len in [4, 0, 0, 0, 0, 0] {
+            p.u32s([len]);
+        }
+        p.bytes(b"snap");
+        let renamed = p.finish(FORMAT);
+        assert!(matches!(unpack_snapshots(&renamed), Err(CodecError::Label)));
     }
 }

@@ -333,7 +333,7 @@ impl<B: Backend> SqlStore<B> {
             tx.rollback().await?;
             return Ok(false);
         };
-        let message = if row.text("status")? == CaseState::Cancelled.as_str() {
+        let message = if CaseState::parse(&row.text("status")?)? == CaseState::Cancelled {
             format!("cancelled while running on {}", lease.owner)
         } else {
             B::announce(&mut tx).await?;

@@ -83,15 +83,20 @@ impl<B: Backend> SqlStore<B> {
         &self.pool
     }
 
-    /// The series or snapshots of case `id`'s result as JSON ([`served_json`],
+    /// The series or snapshots of case `id`'s result ([`stored_values`],
     /// decoded on the blocking pool); `None` before the result.
-    async fn served(&self, id: i64, what: Packed) -> StoreResult<Option<String>> {
+    async fn stored<T: serde::de::DeserializeOwned + Send + 'static>(
+        &self,
+        id: i64,
+        what: Packed,
+        unpack: fn(&[u8]) -> Result<T, super::codec::CodecError>,
+    ) -> StoreResult<Option<T>> {
         let (text, packed) = what.columns();
         let sql = format!("SELECT {text}, {packed} FROM results WHERE case_id = $1");
         let Some(row) = sqlx::query(&sql).bind(id).fetch_optional(&self.pool).await? else {
             return Ok(None);
         };
-        tokio::task::spawn_blocking(move || served_json(&row, what))
+        tokio::task::spawn_blocking(move || stored_values(&row, what, unpack))
             .await
             .map_err(|e| StoreError::Corrupt(format!("decoding the result of case {id}: {e}")))?
             .map(Some)
@@ -125,7 +130,10 @@ impl<B: Backend> Store for SqlStore<B> {
         Self::sweep(&mut *self.pool.acquire().await?, id, "").await
     }
 
-    async fn sweep_status_counts(&self, ids: RangeInclusive<i64>) -> StoreResult<Vec<(i64, String, i64)>> {
+    async fn sweep_status_counts(
+        &self,
+        ids: RangeInclusive<i64>,
+    ) -> StoreResult<Vec<(i64, CaseStatus, i64)>> {
         let rows = sqlx::query(
             "SELECT sc.sweep_id, COALESCE(r.outcome, c.status) AS st, COUNT(*) AS n \
              FROM sweep_cases sc JOIN cases c ON c.id = sc.case_id LEFT JOIN results r ON r.case_id = c.id \
@@ -136,7 +144,7 @@ impl<B: Backend> Store for SqlStore<B> {
         .fetch_all(&self.pool)
         .await?;
         rows.iter()
-            .map(|r| Ok((r.int("sweep_id")?, r.text("st")?, r.int("n")?)))
+            .map(|r| Ok((r.int("sweep_id")?, status_from_row(r, "st")?, r.int("n")?)))
             .collect()
     }
 
@@ -179,12 +187,13 @@ impl<B: Backend> Store for SqlStore<B> {
         rows.iter().map(|r| r.int("sweep_id")).collect()
     }
 
-    async fn case_series_json(&self, id: i64) -> StoreResult<Option<String>> {
-        self.served(id, Packed::Series).await
+    async fn case_series(&self, id: i64) -> StoreResult<Option<Vec<Sample>>> {
+        self.stored(id, Packed::Series, super::codec::unpack_series).await
     }
 
-    async fn case_snapshots_json(&self, id: i64) -> StoreResult<Option<String>> {
-        self.served(id, Packed::Snapshots).await
+    async fn case_snapshots(&self, id: i64) -> StoreResult<Option<Vec<Snapshot>>> {
+        self.stored(id, Packed::Snapshots, super::codec::unpack_snapshots)
+            .await
     }
 
     async fn set_measurements(&self, id: i64, points: &str) -> StoreResult<()> {
@@ -271,7 +280,9 @@ impl<B: Backend> Store for SqlStore<B> {
         )
         .fetch_all(&self.pool)
         .await?;
-        rows.iter().map(|r| Ok((r.text("st")?, r.int("n")?))).collect()
+        rows.iter()
+            .map(|r| Ok((status_from_row(r, "st")?, r.int("n")?)))
+            .collect()
     }
 
     async fn queue_depth(&self) -> StoreResult<i64> {

@@ -96,7 +96,10 @@ impl<B: Backend> SqlStore<B> {
         .bind(now)
         .fetch_one(&mut *conn)
         .await?;
-        Ok((row.int("id")?, row.text("status")? == CaseState::Done.as_str()))
+        Ok((
+            row.int("id")?,
+            CaseState::parse(&row.text("status")?)? == CaseState::Done,
+        ))
     }
 
     /// [`Store::control_sweep`].

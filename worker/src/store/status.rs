@@ -196,6 +196,20 @@ mod tests {
         }
     }
 
+    /// Counts keyed by status are a JSON object keyed by word, and read back.
+    #[test]
+    fn counts_by_status_are_objects_by_word() {
+        let counts: std::collections::BTreeMap<CaseStatus, i64> =
+            CaseStatus::all().into_iter().zip(1..).collect();
+        let json = serde_json::to_value(&counts).unwrap();
+        assert_eq!(json["topology_changed"], 7);
+        assert_eq!(json["cancelled"], 9);
+        assert_eq!(
+            serde_json::from_value::<std::collections::BTreeMap<CaseStatus, i64>>(json).unwrap(),
+            counts
+        );
+    }
+
     #[test]
     fn statuses_order_by_word() {
         let mut all = CaseStatus::all();

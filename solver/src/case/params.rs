@@ -272,8 +272,8 @@ pub const PARAMETERS: &[Parameter] = &[
               between the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth of one \
               edge's period in force curves) or \"smooth\" (C1 cubic curves through the nodes: gap, normal and the \
               forces' weights on the nodes vary smoothly as one rod slides along another; a rope pulled over a rod \
-              wavers by 0.46 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 3.8 % of F \
-              bar and its inversion to 128.7, at five times the cost: docs/FIDELITY.md, \"Contact geometry\").",
+              wavers by 0.40 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.93 % of F \
+              bar and its inversion to 128.8, at five times the cost: docs/FIDELITY.md, \"Contact geometry\").",
         value: UNCHECKED,
     },
     Parameter {

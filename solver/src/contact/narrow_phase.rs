@@ -1,6 +1,7 @@
 //! The narrow phase's choices (paper Sec. 3.2): which candidate pairs from
 //! the broad phase become contacts, and eq. (9)'s sliding direction.
 use super::broad_phase::{CandidatePair, Segment};
+use super::curve::CurvePair;
 use nalgebra::Vector3;
 
 /// Whether candidate `k` duplicates a neighbour: its closest point lies on a
@@ -60,4 +61,167 @@ pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vect
     let ut = u - normal * u.dot(normal);
     let norm = ut.norm();
     if norm > 0.0 { ut / norm } else { Vector3::zeros() }
+}
+
+/// Smooth contacts ([`super::curve`]) whose closest points nearly coincide:
+/// `keep[k]` says whether candidate `k` stays. Pairs are taken nearest
+/// first; one is dropped when a kept pair of an adjacent piece pair (the
+/// eight around it, on the same rods) has its contact points within
+/// `fraction` of this pair's segments' lengths on both curves. Nearly
+/// parallel strands put the closest points of neighbouring piece pairs on
+/// the pieces' shared ends, so a line contact is found by several pairs at
+/// almost the same place; such near-duplicates make the Delassus operator
+/// nearly singular and slow the solve. Points further apart than `fraction`
+/// of an edge all stay, so a line contact keeps a point every `fraction`
+/// edges or closer. `order` is a reusable buffer.
+pub(crate) fn merge_close_curves(
+    pairs: &[CandidatePair],
+    curves: &[CurvePair],
+    segments: &[Segment],
+    fraction: f64,
+    order: &mut Vec<usize>,
+    keep: &mut Vec<bool>,
+) {
+    order.clear();
+    order.extend(0..pairs.len());
+    order.sort_unstable_by(|&a, &b| curves[a].distance.total_cmp(&curves[b].distance).then(a.cmp(&b)));
+    keep.clear();
+    keep.resize(pairs.len(), false);
+    // Segment `i`'s neighbour `d` along its rod, if any.
+    let step = |i: usize, d: isize| {
+        let n = i.checked_add_signed(d)?;
+        (n < segments.len()
+            && segments[n].body == segments[i].body
+            && segments[n].index.abs_diff(segments[i].index) == d.unsigned_abs())
+        .then_some(n)
+    };
+    for &k in order.iter() {
+        let p = &pairs[k];
+        let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
+        let tol_a = fraction * (segments[p.i].b - segments[p.i].a).norm();
+        let tol_b = fraction * (segments[p.j].b - segments[p.j].a).norm();
+        let mut duplicate = false;
+        'around: for di in -1..=1 {
+            for dj in -1..=1 {
+                if (di, dj) == (0, 0) {
+                    continue;
+                }
+                let (Some(i), Some(j)) = (step(p.i, di), step(p.j, dj)) else {
+                    continue;
+                };
+                // Pairs are stored with i < j; a swapped key swaps the points.
+                let (key, swapped) = if i < j { ((i, j), false) } else { ((j, i), true) };
+                let Ok(m) = pairs.binary_search_by(|q| (q.i, q.j).cmp(&key)) else {
+                    continue; // no such candidate (not a failure)
+                };
+                if !keep[m] {
+                    continue;
+                }
+                let (ma, mb) = if swapped {
+                    (&curves[m].point_b, &curves[m].point_a)
+                } else {
+                    (&curves[m].point_a, &curves[m].point_b)
+                };
+                if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b {
+                    duplicate = true;
+                    break 'around;
+                }
+            }
+        }
+        keep[k] = !duplicate;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::broad_phase::{brute_force, polyline_segments};
+    use crate::contact::curve::{Piece, closest_points_on_pieces};
+
+    /// Candidate pairs of rods `a` and `b` (radius `r`) within `margin` and
+    /// their curves' closest points.
+    fn candidates(
+        rods: [&[Vector3<f64>]; 2],
+        r: f64,
+        margin: f64,
+    ) -> (Vec<Segment>, Vec<CandidatePair>, Vec<CurvePair>) {
+        let mut segments = polyline_segments(rods[0], r, 0);
+        segments.extend(polyline_segments(rods[1], r, 1));
+        let pairs = brute_force(&segments, &[2, 2], margin).unwrap();
+        let piece = |s: &Segment| Piece::new(rods[s.body].len(), s.index, |i| rods[s.body][i]);
+        let curves = pairs
+            .iter()
+            .map(|p| closest_points_on_pieces(&piece(&segments[p.i]), &piece(&segments[p.j])))
+            .collect();
+        (segments, pairs, curves)
+    }
+
+    fn line(start: Vector3<f64>, dir: Vector3<f64>, n: usize) -> Vec<Vector3<f64>> {
+        (0..n).map(|i| start + i as f64 * dir).collect()
+    }
+
+    /// Two straight strands lying side by side, their nodes staggered: the
+    /// pairs' closest points come in near-duplicates at the pieces' ends;
+    /// merged, no two kept points of adjacent pairs are within the fraction
+    /// on both curves, every dropped point has a kept one that close, and
+    /// the kept points still hold the line contact at least once per edge.
+    #[test]
+    fn merging_keeps_a_line_contact() {
+        let (r, edge, fraction) = (0.5, 1.0, 0.25);
+        let a = line(Vector3::zeros(), Vector3::x() * edge, 21);
+        let b = line(Vector3::new(0.37 * edge, 2.0 * r, 0.0), Vector3::x() * edge, 21);
+        let (segments, pairs, curves) = candidates([&a, &b], r, 0.25 * r);
+        let (mut order, mut keep) = (Vec::new(), Vec::new());
+        merge_close_curves(&pairs, &curves, &segments, fraction, &mut order, &mut keep);
+        let close = |k: usize, m: usize| {
+            (curves[k].point_a - curves[m].point_a).norm() <= fraction * edge
+                && (curves[k].point_b - curves[m].point_b).norm() <= fraction * edge
+        };
+        let adjacent = |k: usize, m: usize| {
+            k != m && pairs[k].i.abs_diff(pairs[m].i) <= 1 && pairs[k].j.abs_diff(pairs[m].j) <= 1
+        };
+        let all = 0..pairs.len();
+        let near_duplicates = all.clone().flat_map(|k| all.clone().map(move |m| (k, m)));
+        assert!(
+            near_duplicates
+                .filter(|&(k, m)| adjacent(k, m) && close(k, m))
+                .count()
+                > 10
+        );
+        for k in all.clone() {
+            let kept_close = all
+                .clone()
+                .filter(|&m| keep[m] && adjacent(k, m) && close(k, m))
+                .count();
+            if keep[k] {
+                assert_eq!(kept_close, 0, "kept pair {k} has a kept near-duplicate");
+            } else {
+                assert!(kept_close > 0, "pair {k} dropped without a kept near-duplicate");
+            }
+        }
+        let mut xs: Vec<f64> = all.filter(|&k| keep[k]).map(|k| curves[k].point_a.x).collect();
+        xs.sort_by(f64::total_cmp);
+        assert!(xs.len() < pairs.len());
+        assert!(xs[0] <= 0.37 * edge + 1.0 && *xs.last().unwrap() >= 19.0);
+        assert!(xs.windows(2).all(|w| w[1] - w[0] <= edge), "kept points {xs:?}");
+    }
+
+    /// Two strands crossing at right angles meet at one point: of the
+    /// pairs around it (the crossing on a node, where four pairs find it),
+    /// one stays, the nearest.
+    #[test]
+    fn merging_a_crossing_keeps_one_contact() {
+        let r = 0.5;
+        let a = line(Vector3::new(-4.0, 0.0, 0.0), Vector3::x(), 9);
+        let b = line(Vector3::new(0.0, -4.0, 2.0 * r), Vector3::y(), 9);
+        let (segments, pairs, curves) = candidates([&a, &b], r, 0.25 * r);
+        assert_eq!(pairs.len(), 4);
+        let (mut order, mut keep) = (Vec::new(), Vec::new());
+        merge_close_curves(&pairs, &curves, &segments, 0.25, &mut order, &mut keep);
+        assert_eq!(keep.iter().filter(|&&k| k).count(), 1);
+        let kept = keep.iter().position(|&k| k).unwrap();
+        let nearest = curves.iter().map(|c| c.distance).fold(f64::INFINITY, f64::min);
+        assert_eq!(curves[kept].distance, nearest);
+        assert!((curves[kept].distance - 2.0 * r).abs() < 1e-12);
+    }
 }

@@ -16,6 +16,14 @@ use nalgebra::Vector3;
 /// cut a mu = 0.5 case's detection time most.
 pub(super) const SKIN: f64 = 0.25;
 
+/// Smooth contacts whose contact points lie within this fraction of an edge
+/// of a nearer one's, on both curves, are merged into it
+/// ([`narrow_phase::merge_close_curves`]). Over n = 3's adaptive pull
+/// (docs/FIDELITY.md) 0.25 took F bar's ripple from 3.8 % to 0.93 % in as
+/// many steps; 0.35 and 0.42 dropped constraints a line contact needs (the
+/// step shrank for penetration: 1.3 and 1.7 times the steps).
+const MERGE_FRACTION: f64 = 0.25;
+
 impl World {
     /// The contacts of the start-of-step state into `contacts` (and their
     /// segment pairs into `pair_ids`).
@@ -58,13 +66,22 @@ impl World {
                 let (a, b) = pieces(&self.rods, &self.segments[p.i], &self.segments[p.j]);
                 closest_points_on_pieces(&a, &b)
             }));
+            narrow_phase::merge_close_curves(
+                pairs,
+                &self.curves,
+                &self.segments,
+                MERGE_FRACTION,
+                &mut self.merge_order,
+                &mut self.merge_keep,
+            );
         }
         self.contacts.clear();
         self.pair_ids.clear();
         for (k, p) in pairs.iter().enumerate() {
-            // Smooth contacts keep every pair: a pair's closest points lie on
-            // a piece's end wherever the distance runs along a line contact,
-            // and each pair's constraint holds its stretch of that line.
+            // Smooth contacts keep every pair but near-duplicates: a pair's
+            // closest points lie on a piece's end wherever the distance runs
+            // along a line contact, and each pair's constraint holds its
+            // stretch of that line.
             if self.contact.candidates == Candidates::Detected
                 && !smooth
                 && narrow_phase::redundant(pairs, k, &self.segments)
@@ -77,6 +94,9 @@ impl World {
             let mu = self.contact.friction;
             // The contact and each rod's unit tangent at it.
             let found = if smooth {
+                if !self.merge_keep[k] {
+                    continue;
+                }
                 let curve = &self.curves[k];
                 if curve.distance >= contact_distance + margin {
                     continue;

@@ -85,6 +85,10 @@ pub struct World {
     segments: Vec<Segment>,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
+    /// Which of `curves` stay after merging near-duplicates, and the merge's
+    /// sort buffer.
+    merge_keep: Vec<bool>,
+    merge_order: Vec<usize>,
     gaps: Vec<usize>,
     contacts: Vec<ContactPoint>,
     pair_ids: Vec<(usize, usize)>,
@@ -164,6 +168,8 @@ impl World {
             gauss_seidel: GaussSeidel::new(),
             segments: Vec::new(),
             curves: Vec::new(),
+            merge_keep: Vec::new(),
+            merge_order: Vec::new(),
             gaps,
             contacts: Vec::new(),
             pair_ids: Vec::new(),

@@ -1,6 +1,7 @@
 //! A sweep over two axes as a map (`GET /api/sweeps/{id}/figures/map.svg`):
 //! each grid point's cell coloured by its critical l̄_k, contours of l̄_k
-//! between the points, and the points without an inversion crossed.
+//! between the points, and the points without an inversion crossed; with a
+//! refinement, the cases it added and where the outcome changes.
 use crate::charts::compact;
 use crate::symbols::L_K_BAR;
 use anyhow::{Result, anyhow};
@@ -15,6 +16,14 @@ pub struct MapPoint {
     pub l_k_bar: Option<f64>,
 }
 
+/// A change of outcome on a refined grid line: the two cases bracketing it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapBracket {
+    pub ends: [(f64, f64); 2],
+    /// The ends are within the refinement's tolerance.
+    pub settled: bool,
+}
+
 /// A map: the points of a grid over two axes, with titles.
 pub struct MapFigure {
     pub title: String,
@@ -23,6 +32,10 @@ pub struct MapFigure {
     pub x_label: String,
     pub y_label: String,
     pub points: Vec<MapPoint>,
+    /// Cases a refinement added between the grid's points.
+    pub refined: Vec<MapPoint>,
+    /// Where the outcome changes along refined lines.
+    pub brackets: Vec<MapBracket>,
 }
 
 /// The colour of `t` in 0..1: a perceptually ordered ramp (viridis' ends
@@ -238,6 +251,29 @@ pub fn map_chart(figure: &MapFigure) -> Result<String> {
                 .label("no inversion (grey)")
                 .legend(|(x, y)| Cross::new((x + 9, y), 6, BLACK.stroke_width(2)));
         }
+        if !figure.refined.is_empty() {
+            chart
+                .draw_series(figure.refined.iter().map(|p| {
+                    let fill = p.l_k_bar.map_or(grey, |v| ramp(t(v)));
+                    EmptyElement::at((p.x, p.y))
+                        + Circle::new((0, 0), 4, fill.filled())
+                        + Circle::new((0, 0), 4, BLACK.stroke_width(1))
+                }))
+                .map_err(|e| anyhow!("{e}"))?
+                .label("a case of the refinement (its critical l̄_k's colour; grey: none)")
+                .legend(|(x, y)| Circle::new((x + 9, y), 4, BLACK.stroke_width(1)));
+        }
+        if !figure.brackets.is_empty() {
+            let red = RGBColor(213, 34, 34);
+            chart
+                .draw_series(
+                    (figure.brackets.iter())
+                        .map(|b| PathElement::new(b.ends.to_vec(), red.stroke_width(if b.settled { 4 } else { 2 }))),
+                )
+                .map_err(|e| anyhow!("{e}"))?
+                .label("the outcome changes between these cases")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], red.stroke_width(4)));
+        }
         chart
             .configure_series_labels()
             .position(crate::charts::LegendAt::LowerRight)
@@ -314,11 +350,22 @@ mod tests {
             x_label: "h (mm)".into(),
             y_label: "μ".into(),
             points,
+            refined: vec![MapPoint {
+                x: 2.2,
+                y: 0.25,
+                l_k_bar: None,
+            }],
+            brackets: vec![MapBracket {
+                ends: [(2.0, 0.25), (2.4, 0.25)],
+                settled: true,
+            }],
         })
         .unwrap();
         assert!(svg.contains("no inversion (grey)") && svg.contains("held fixed: n = 3"));
-        // Nine cells: eight coloured and one grey (besides the colour bar's bands and the legend's box).
-        assert_eq!(svg.matches("fill=\"#C8C8C8\"").count(), 1, "the grey cell");
+        assert!(svg.contains("the outcome changes between these cases"), "the bracket's legend");
+        // Nine cells: eight coloured and one grey, and the refined case without an inversion
+        // (besides the colour bar's bands and the legend's box).
+        assert_eq!(svg.matches("fill=\"#C8C8C8\"").count(), 2, "the grey cell and point");
     }
 
     #[test]

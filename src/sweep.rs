@@ -64,7 +64,8 @@ fn refine_spec(text: &str) -> Result<knotsweep_server::refine::RefineSpec> {
         let Some((axis, tol)) = item.split_once('=') else {
             bail!("--refine {item}: expected AXIS=TOLERANCE");
         };
-        let tol: f64 = (tol.trim().parse()).with_context(|| format!("--refine {item}: the tolerance is not a number"))?;
+        let tol: f64 = (tol.trim().parse())
+            .with_context(|| format!("--refine {item}: the tolerance is not a number"))?;
         tolerance.insert(axis.trim().to_string(), tol);
     }
     Ok(knotsweep_server::refine::RefineSpec { tolerance })
@@ -240,7 +241,10 @@ pub fn run(args: Args) -> Result<()> {
                 write_figure(dir, "phase", &svg)?;
             }
             if diagram.varied.len() >= 2 {
-                let svg = core.map_figure(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+                let svg = core
+                    .map_figure(id)
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
                 write_figure(dir, "map", &svg)?;
             }
             println!("figures written to {}", dir.display());
@@ -293,7 +297,9 @@ async fn refine(
     let mut view = match core.submit_refinement(id, spec.clone()).await {
         Err(knotsweep_server::error::CoreError::Conflict(_)) => {
             eprintln!("sweep {id}'s refinement is running: following it");
-            core.refinement(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?
+            core.refinement(id)
+                .await
+                .map_err(|e| anyhow::anyhow!(describe(e)))?
         }
         other => other.map_err(|e| anyhow::anyhow!(describe(e)))?,
     };
@@ -303,7 +309,10 @@ async fn refine(
             _ = tokio::time::sleep(Duration::from_millis(300)) => {}
             _ = signal.as_mut() => return Ok(false),
         }
-        view = core.refinement(id).await.map_err(|e| anyhow::anyhow!(describe(e)))?;
+        view = core
+            .refinement(id)
+            .await
+            .map_err(|e| anyhow::anyhow!(describe(e)))?;
         for p in &view.points[shown.min(view.points.len())..] {
             let at: Vec<String> = p.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
             let found = p.outcome.map_or("no outcome".to_string(), |o| format!("{o:?}"));
@@ -327,7 +336,9 @@ async fn refine(
             b.high.value,
             b.high.case_id,
             b.width,
-            b.reason.as_ref().map_or(String::new(), |r| format!(" (stopped: {r})"))
+            b.reason
+                .as_ref()
+                .map_or(String::new(), |r| format!(" (stopped: {r})"))
         );
     }
     println!(

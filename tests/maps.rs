@@ -72,7 +72,12 @@ async fn a_refined_map_lands_each_change_of_outcome_within_the_tolerance() {
     assert_eq!(status, StatusCode::ACCEPTED, "{accepted:#}");
     let (status, again) = post(&c, &refine, &json!({"tolerance": tolerance})).await;
     assert_eq!(status, StatusCode::CONFLICT, "one at a time: {again:#}");
-    let r = until_settled(&c, &format!("{url}/api/sweeps/{id}/refinement"), Duration::from_secs(900)).await;
+    let r = until_settled(
+        &c,
+        &format!("{url}/api/sweeps/{id}/refinement"),
+        Duration::from_secs(900),
+    )
+    .await;
     assert_eq!(r["status"], "done", "{r:#}");
 
     // The grid's own changes of outcome, from its phase diagram: each line
@@ -97,7 +102,10 @@ async fn a_refined_map_lands_each_change_of_outcome_within_the_tolerance() {
         }
     }
     println!("grid outcomes (h across, mu up): {outcomes:?}");
-    assert!(!lines.is_empty(), "the grid must change outcome somewhere: {outcomes:?}");
+    assert!(
+        !lines.is_empty(),
+        "the grid must change outcome somewhere: {outcomes:?}"
+    );
     let brackets = r["brackets"].as_array().unwrap();
     for (axis, held) in &lines {
         assert!(
@@ -109,29 +117,57 @@ async fn a_refined_map_lands_each_change_of_outcome_within_the_tolerance() {
     // themselves) and lie within the tolerance.
     for b in brackets {
         let axis = b["axis"].as_str().unwrap();
-        let (lo, hi) = (b["low"]["value"].as_f64().unwrap(), b["high"]["value"].as_f64().unwrap());
+        let (lo, hi) = (
+            b["low"]["value"].as_f64().unwrap(),
+            b["high"]["value"].as_f64().unwrap(),
+        );
         let low = case_outcome(&c, &url, b["low"]["case_id"].as_i64().unwrap()).await;
         let high = case_outcome(&c, &url, b["high"]["case_id"].as_i64().unwrap()).await;
         println!("along {axis} at {}: {low} at {lo}, {high} at {hi}", b["at"]);
-        assert_eq!((low, high), (b["low"]["outcome"].as_str().unwrap(), b["high"]["outcome"].as_str().unwrap()));
+        assert_eq!(
+            (low, high),
+            (
+                b["low"]["outcome"].as_str().unwrap(),
+                b["high"]["outcome"].as_str().unwrap()
+            )
+        );
         assert_ne!(low, high, "{b:#}");
-        assert!(b["settled"] == true && hi - lo <= tolerance[axis].as_f64().unwrap() * (1.0 + 1e-12), "{b:#}");
+        assert!(
+            b["settled"] == true && hi - lo <= tolerance[axis].as_f64().unwrap() * (1.0 + 1e-12),
+            "{b:#}"
+        );
         assert!(lo < hi);
     }
     // Its cases ran as sweeps of the queue, one each.
     let added = r["points"].as_array().unwrap();
-    assert!(!added.is_empty() && added.len() == r["sweeps"].as_array().unwrap().len(), "{r:#}");
+    assert!(
+        !added.is_empty() && added.len() == r["sweeps"].as_array().unwrap().len(),
+        "{r:#}"
+    );
 
     // The map draws the grid, the added cases and the brackets.
     let (status, svg) = get_text(&c, &format!("{url}/api/sweeps/{id}/figures/map.svg")).await;
     assert_eq!(status, StatusCode::OK);
-    assert!(svg.contains("a case of the refinement") && svg.contains("the outcome changes between these cases"));
+    assert!(
+        svg.contains("a case of the refinement") && svg.contains("the outcome changes between these cases")
+    );
     // A refinement replaces the one before once it is done (its cases cached).
     let (status, _) = post(&c, &refine, &json!({"tolerance": {"mu": TOL_MU * 4.0}})).await;
     assert_eq!(status, StatusCode::ACCEPTED);
-    let coarse = until_settled(&c, &format!("{url}/api/sweeps/{id}/refinement"), Duration::from_secs(300)).await;
+    let coarse = until_settled(
+        &c,
+        &format!("{url}/api/sweeps/{id}/refinement"),
+        Duration::from_secs(300),
+    )
+    .await;
     assert_eq!(coarse["status"], "done", "{coarse:#}");
-    assert!(coarse["brackets"].as_array().unwrap().iter().all(|b| b["axis"] == "mu"));
+    assert!(
+        coarse["brackets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|b| b["axis"] == "mu")
+    );
     server.shutdown().await.unwrap();
 }
 
@@ -163,7 +199,10 @@ async fn a_fit_is_taken_up_again_after_a_restart() {
     assert_eq!(listed[0]["id"], id, "{listed:#}");
     let ended = until_settled(&c, &format!("{url}/api/fits/{id}"), Duration::from_secs(300)).await;
     assert_eq!(ended["status"], "failed", "{ended:#}");
-    assert!(ended["reason"].as_str().unwrap().contains("same sign"), "{ended:#}");
+    assert!(
+        ended["reason"].as_str().unwrap().contains("same sign"),
+        "{ended:#}"
+    );
     let evaluations = ended["evaluations"].as_array().unwrap();
     let simulated: Vec<f64> = (evaluations.iter())
         .map(|e| e["points"][0]["l_k_bar"].as_f64().unwrap())

@@ -791,11 +791,21 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
     let id = submit_sweep(&c, &url, &json!({"base": base, "grid": {"mu": [0.1, 0.15]}})).await;
     let single = submit_sweep(&c, &url, &json!({"base": base})).await;
     // Two axes: a map (its h = 5 mm points are the first sweep's, cached).
-    let two = submit_sweep(&c, &url, &json!({"base": without(base.clone(), "h"), "grid": {"h": [5e-3, 5.5e-3], "mu": [0.1, 0.15]}})).await;
+    let two = submit_sweep(
+        &c,
+        &url,
+        &json!({"base": without(base.clone(), "h"), "grid": {"h": [5e-3, 5.5e-3], "mu": [0.1, 0.15]}}),
+    )
+    .await;
     wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
     wait_sweep(&c, &url, single, Duration::from_secs(120), finished).await;
     wait_sweep(&c, &url, two, Duration::from_secs(120), finished).await;
-    let (status, _) = post(&c, &format!("{url}/api/sweeps/{two}/refine"), &json!({"tolerance": {"mu": 0.01}})).await;
+    let (status, _) = post(
+        &c,
+        &format!("{url}/api/sweeps/{two}/refine"),
+        &json!({"tolerance": {"mu": 0.01}}),
+    )
+    .await;
     assert_eq!(status, reqwest::StatusCode::ACCEPTED);
     let r = c
         .put(format!("{url}/api/sweeps/{id}/measurements"))
@@ -941,19 +951,25 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
     let map = browser
         .js(
             "return [document.getElementById('map-summary').textContent, document.getElementById('refinement').textContent, \
-               document.querySelector('#refine-fields .unit').textContent, document.getElementById('map').naturalWidth, \
+               [...document.querySelectorAll('#refine-fields .unit')].map((u) => u.textContent), document.getElementById('map').naturalWidth, \
                document.getElementById('brackets').textContent]",
             json!([]),
         )
         .await;
-    assert!(map[0].as_str().unwrap().contains("h (across) and μ (up)"), "{map}");
+    assert!(
+        map[0].as_str().unwrap().contains("h (across) and μ (up)"),
+        "{map}"
+    );
     assert!(map[1].as_str().unwrap().contains("μ to 0.01"), "{map}");
-    assert_eq!(map[2], "", "μ has no unit: {map}");
+    assert_eq!(map[2], json!(["m", ""]), "h in m, μ without a unit: {map}");
     assert!(map[3].as_u64().unwrap() > 500, "{map}");
     let (_, refined) = get(&c, &format!("{url}/api/sweeps/{two}/refinement")).await;
     let shown = map[4].as_str().unwrap();
     for b in refined["brackets"].as_array().unwrap() {
-        assert!(shown.contains(&format!("case {}", b["low"]["case_id"])), "{shown} vs {refined:#}");
+        assert!(
+            shown.contains(&format!("case {}", b["low"]["case_id"])),
+            "{shown} vs {refined:#}"
+        );
     }
     // The sweep page of a two-axis sweep links its map's page.
     browser
@@ -963,7 +979,10 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
         )
         .await;
     let link = browser
-        .js("return document.getElementById('map-link').getAttribute('href')", json!([]))
+        .js(
+            "return document.getElementById('map-link').getAttribute('href')",
+            json!([]),
+        )
         .await;
     assert_eq!(link, json!(format!("#/sweeps/{two}/map")));
 

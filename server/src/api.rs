@@ -34,7 +34,7 @@ use crate::extract::{Id, MAX_PAGE, Page, Paging, Submission};
 use crate::fit::{Evaluation, FitSpec, FitStatus, FitView, MeasuredPoint, Simulated};
 use crate::guard::{self, AllowedHosts};
 use crate::measurements::MeasurementsBody;
-use crate::refine::{Bracket, End, Outcome, RefineSpec, RefinedPoint, RefinementView, RefineStatus};
+use crate::refine::{Bracket, End, Outcome, RefineSpec, RefineStatus, RefinedPoint, RefinementView};
 use crate::spec::{Limits, Preset, SweepSpec};
 use crate::views::*;
 use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRef, Path, Query, Request, State};
@@ -610,7 +610,11 @@ async fn get_measurements(State(app): State<App>, Id(id): Id) -> Result<Json<Vec
         (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
     ),
     security((), ("bearer" = [])))]
-async fn refine_sweep(State(app): State<App>, Id(id): Id, body: axum::body::Bytes) -> Result<Response, ApiError> {
+async fn refine_sweep(
+    State(app): State<App>,
+    Id(id): Id,
+    body: axum::body::Bytes,
+) -> Result<Response, ApiError> {
     let spec: RefineSpec = Core::parse_json(&body)?;
     let view = app.core.submit_refinement(id, spec).await?;
     let location = HeaderValue::from_str(&format!("/api/sweeps/{id}/refinement")).expect("ascii");

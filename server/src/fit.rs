@@ -554,7 +554,9 @@ impl Core {
             }
             let mut view: FitView = parse_view(&format!("fit {id}"), &json)?;
             let spec: FitSpec = serde_json::from_value(view.spec.clone()).map_err(|e| {
-                CoreError::Store(knotsweep_worker::StoreError::Corrupt(format!("fit {id}'s spec: {e}")))
+                CoreError::Store(knotsweep_worker::StoreError::Corrupt(format!(
+                    "fit {id}'s spec: {e}"
+                )))
             })?;
             view.id = id;
             view.evaluations.clear();
@@ -583,7 +585,10 @@ impl Core {
 
     async fn save_fit(&self, view: &FitView) -> Result<(), CoreError> {
         let json = serde_json::to_string(view).expect("view serialises");
-        Ok(self.store().update_fit(view.id, status_word(view.status), &json).await?)
+        Ok(self
+            .store()
+            .update_fit(view.id, status_word(view.status), &json)
+            .await?)
     }
 
     /// The search of fit `view` to its end (each evaluation stored as it

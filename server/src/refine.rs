@@ -192,7 +192,8 @@ fn bracket(axis: &str, at: BTreeMap<String, Value>, low: End, high: End, tol: f6
         low,
         high,
         width,
-        settled: width <= tol || (integer(axis) && width <= 1.0),
+        // Within a rounding of the tolerance: halving 1 mm four times lands on 62.5 µm, not below it.
+        settled: width <= tol * (1.0 + 1e-9) || (integer(axis) && width <= 1.0),
         reason: None,
     }
 }
@@ -253,17 +254,27 @@ impl Core {
         if spec.tolerance.is_empty() {
             errors.push(FieldError::new(
                 "tolerance",
-                format!("give at least one varied axis of the sweep: {}", detail.varied.join(", ")),
+                format!(
+                    "give at least one varied axis of the sweep: {}",
+                    detail.varied.join(", ")
+                ),
             ));
         }
         for (axis, tol) in &spec.tolerance {
             let numeric = (solver::case::PARAMETERS.iter()).any(|p| {
-                p.name == axis && matches!(p.range, Range::Interval(..) | Range::LengthOver(..) | Range::Integers(..))
+                p.name == axis
+                    && matches!(
+                        p.range,
+                        Range::Interval(..) | Range::LengthOver(..) | Range::Integers(..)
+                    )
             });
             if !detail.varied.contains(axis) {
                 errors.push(FieldError::new(
                     format!("tolerance.{axis}"),
-                    format!("not a varied axis of sweep {id} (those are: {})", detail.varied.join(", ")),
+                    format!(
+                        "not a varied axis of sweep {id} (those are: {})",
+                        detail.varied.join(", ")
+                    ),
                 ));
             } else if !numeric {
                 errors.push(FieldError::new(
@@ -272,7 +283,10 @@ impl Core {
                 ));
             }
             if !(tol.is_finite() && *tol > 0.0) {
-                errors.push(FieldError::new(format!("tolerance.{axis}"), "must be a positive number"));
+                errors.push(FieldError::new(
+                    format!("tolerance.{axis}"),
+                    "must be a positive number",
+                ));
             }
         }
         if !errors.is_empty() {
@@ -396,7 +410,9 @@ impl Core {
             view.rounds += 1;
             let mut submitted = Vec::new();
             for &(k, mid) in &open {
-                let sweep = self.bisection_sweep(id, &view.brackets[k], mid, view.rounds).await?;
+                let sweep = self
+                    .bisection_sweep(id, &view.brackets[k], mid, view.rounds)
+                    .await?;
                 let raw = serde_json::to_value(&sweep).expect("spec serialises");
                 let done = self.submit(sweep, &raw, None).await.map_err(|e| e.to_string())?;
                 view.sweeps.push(done.sweep.summary.id);
@@ -461,7 +477,13 @@ impl Core {
     }
 
     /// The sweep of one bisection: the low end's case with the axis at `mid`.
-    async fn bisection_sweep(&self, id: i64, b: &Bracket, mid: f64, round: usize) -> Result<SweepSpec, String> {
+    async fn bisection_sweep(
+        &self,
+        id: i64,
+        b: &Bracket,
+        mid: f64,
+        round: usize,
+    ) -> Result<SweepSpec, String> {
         let record = (self.store().get_case(b.low.case_id).await)
             .map_err(|e| e.to_string())?
             .ok_or_else(|| format!("case {} is gone", b.low.case_id))?;
@@ -479,7 +501,11 @@ impl Core {
             name: Some(format!(
                 "refining sweep {id} (round {round}): {} at {}",
                 b.axis,
-                if at.is_empty() { "the base".to_string() } else { at.join(", ") }
+                if at.is_empty() {
+                    "the base".to_string()
+                } else {
+                    at.join(", ")
+                }
             )),
             base: Some(Map::from_iter(base)),
             grid: Some(BTreeMap::from([(b.axis.clone(), vec![value])])),
@@ -539,9 +565,9 @@ mod tests {
     use super::*;
 
     /// A grid over (h, mu) whose outcome is known everywhere: no inversion
-    /// below the line mu = 0.2 + 50 (h - 2e-3), a clean snap above.
+    /// below the line mu = 0.2 + 100 (h - 2e-3), a clean snap above.
     fn truth(h: f64, mu: f64) -> Outcome {
-        if mu < 0.2 + 50.0 * (h - 2e-3) {
+        if mu < 0.2 + 100.0 * (h - 2e-3) {
             Outcome::NoInversion
         } else {
             Outcome::CleanSnap
@@ -551,7 +577,10 @@ mod tests {
     fn point(case_id: i64, h: f64, mu: f64) -> GridPoint {
         GridPoint {
             case_id,
-            params: BTreeMap::from([("h".to_string(), Value::from(h)), ("mu".to_string(), Value::from(mu))]),
+            params: BTreeMap::from([
+                ("h".to_string(), Value::from(h)),
+                ("mu".to_string(), Value::from(mu)),
+            ]),
             outcome: Some(truth(h, mu)),
             l_k_bar: None,
         }
@@ -561,14 +590,18 @@ mod tests {
     fn bisection_lands_every_change_within_the_tolerance() {
         let (hs, mus) = ([1.6e-3, 2.4e-3, 3.2e-3], [0.1, 0.3, 0.5]);
         let grid: Vec<GridPoint> = (hs.iter().enumerate())
-            .flat_map(|(i, &h)| mus.iter().enumerate().map(move |(j, &mu)| point((3 * i + j) as i64, h, mu)))
+            .flat_map(|(i, &h)| {
+                mus.iter()
+                    .enumerate()
+                    .map(move |(j, &mu)| point((3 * i + j) as i64, h, mu))
+            })
             .collect();
         let tolerance = BTreeMap::from([("h".to_string(), 1e-5), ("mu".to_string(), 0.01)]);
         let mut brackets = grid_brackets(&grid, &tolerance);
-        // Along mu: each h's line crosses mu = 0.2 + 50 (h - 2e-3) (0.18, 0.22, 0.26).
-        // Along h: mu = 0.3 changes between 2.4 and 3.2 mm (the line passes h = 2.2 mm), mu = 0.1 between 1.6 and 2.4.
+        // Along mu: each h's line crosses the boundary (at mu = 0.16, 0.24, 0.32).
+        // Along h: only mu = 0.3's (at h = 3 mm; mu = 0.1's and 0.5's lie at 1 and 5 mm, off the grid).
         assert_eq!(brackets.iter().filter(|b| b.axis == "mu").count(), 3);
-        assert_eq!(brackets.iter().filter(|b| b.axis == "h").count(), 2);
+        assert_eq!(brackets.iter().filter(|b| b.axis == "h").count(), 1);
         let mut next_id = 100;
         for _ in 0..MAX_ROUNDS {
             let mut after = Vec::new();
@@ -592,16 +625,19 @@ mod tests {
             }
             brackets = after;
         }
-        assert_eq!(brackets.len(), 5);
+        assert_eq!(brackets.len(), 4);
         for b in &brackets {
             assert!(b.settled && b.width <= tolerance[&b.axis], "{b:?}");
             assert_ne!(b.low.outcome, b.high.outcome);
             // The true boundary lies between the pair.
             let boundary = match b.axis.as_str() {
-                "mu" => 0.2 + 50.0 * (b.at["h"].as_f64().unwrap() - 2e-3),
-                _ => 2e-3 + (b.at["mu"].as_f64().unwrap() - 0.2) / 50.0,
+                "mu" => 0.2 + 100.0 * (b.at["h"].as_f64().unwrap() - 2e-3),
+                _ => 2e-3 + (b.at["mu"].as_f64().unwrap() - 0.2) / 100.0,
             };
-            assert!(b.low.value <= boundary && boundary <= b.high.value, "{b:?} vs {boundary}");
+            assert!(
+                b.low.value <= boundary && boundary <= b.high.value,
+                "{b:?} vs {boundary}"
+            );
         }
     }
 
@@ -632,7 +668,11 @@ mod tests {
         let end = |value: f64| End {
             value,
             case_id: 0,
-            outcome: if value < 4.0 { Outcome::CleanSnap } else { Outcome::NoInversion },
+            outcome: if value < 4.0 {
+                Outcome::CleanSnap
+            } else {
+                Outcome::NoInversion
+            },
             l_k_bar: None,
         };
         let b = bracket("n", BTreeMap::new(), end(2.0), end(5.0), 0.5);

@@ -268,7 +268,10 @@ pub(crate) async fn sweeps(store: &dyn Store) {
     let listed: Vec<(i64, String)> = (store.list_fits().await.unwrap().into_iter())
         .map(|(id, status, _)| (id, status))
         .collect();
-    assert_eq!(listed, vec![(f1, "done".to_string()), (f2, "running".to_string())]);
+    assert_eq!(
+        listed,
+        vec![(f1, "done".to_string()), (f2, "running".to_string())]
+    );
 
     // Refinements: one per sweep, the last put, found by status.
     assert_eq!(store.refinement(a.id).await.unwrap(), None);

@@ -6,7 +6,10 @@ import pytest
 import knotsweep
 from conftest import QUICK, TOKEN
 
-TRUTH = 0.2
+# The paper's rod (n = 3, h = 1.6 mm): its inversion grows smoothly with mu (l_k bar 139.30 at mu = 0.2, 142.59 at
+# 0.3: `knotsweep run --mu 0.2`); the short rods of the other tests invert too erratically with mu to fit.
+PAPER = {}
+TRUTH = 0.3
 
 
 @pytest.fixture(scope="module")
@@ -16,8 +19,8 @@ def client(server):
 
 
 def made_at(client, mu):
-    """The inversion l_k bar the service computes for QUICK at mu."""
-    sweep = client.submit(base=dict(QUICK, mu=mu), name=f"made at mu = {mu}")
+    """The inversion l_k bar the service computes for the paper's rod at mu."""
+    sweep = client.submit(base=dict(PAPER, mu=mu), name=f"made at mu = {mu}")
     assert sweep.wait(progress=False, timeout=600)["status"] == "done"
     point = sweep.phase_diagram(raw=True)["points"][0]
     assert point["inversion"] is not None, point
@@ -26,8 +29,8 @@ def made_at(client, mu):
 
 def test_fit_recovers_the_mu_that_made_a_point(client):
     l_k_bar = made_at(client, TRUTH)
-    fit = client.fit([{"params": {}, "l_k_bar": l_k_bar, "error": 1.0}], range=(0.1, 0.3), base=QUICK,
-                     name="python fit", timeout=900, poll=0.5)
+    fit = client.fit([{"params": {}, "l_k_bar": l_k_bar, "error": 1.0}], range=(0.25, 0.35), base=PAPER,
+                     tolerance=0.005, name="python fit", timeout=1200, poll=0.5)
     assert fit["status"] == "done", fit
     low, high = fit["interval"]
     assert low <= TRUTH <= high and low <= fit["value"] <= high, fit
@@ -37,7 +40,7 @@ def test_fit_recovers_the_mu_that_made_a_point(client):
     # The simulated l_k bar at each end of the range brackets the measurement.
     ends = sorted(fit["evaluations"][:2], key=lambda e: e["value"])
     simulated = [e["points"][0]["l_k_bar"] for e in ends]
-    assert [e["value"] for e in ends] == [0.1, 0.3]
+    assert [e["value"] for e in ends] == [0.25, 0.35]
     assert min(simulated) <= l_k_bar <= max(simulated), simulated
 
 

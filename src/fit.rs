@@ -99,6 +99,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             fit = core
                 .fit(fit.id)
+                .await
                 .map_err(|e| anyhow::anyhow!(crate::sweep::describe(e)))?;
             for e in &fit.evaluations[shown..] {
                 let l_k: Vec<String> = (e.points.iter())

@@ -49,6 +49,26 @@ pub struct Args {
     /// inversion or flip back) or none [default: the specification's, else all].
     #[arg(long, value_parser = PossibleValuesParser::new(SnapshotChoice::ALL.map(SnapshotChoice::as_str)))]
     snapshots: Option<String>,
+    /// Once the sweep is done, bisect every grid line where the outcome
+    /// changes (an inversion or none, a clean snap or not) until the two cases
+    /// bracketing it are within the tolerance: `AXIS=TOL,...` in SI units,
+    /// e.g. `--refine h=2e-4,mu=0.02` (`POST /api/sweeps/{id}/refine`).
+    #[arg(long, value_name = "AXIS=TOL,...")]
+    refine: Option<String>,
+}
+
+/// `--refine h=2e-4,mu=0.02` as a refinement.
+fn refine_spec(text: &str) -> Result<knotsweep_server::refine::RefineSpec> {
+    let mut tolerance = std::collections::BTreeMap::new();
+    for item in text.split(',').filter(|i| !i.trim().is_empty()) {
+        let Some((axis, tol)) = item.split_once('=') else {
+            bail!("--refine {item}: expected AXIS=TOLERANCE");
+        };
+        let tol: f64 = (tol.trim().parse())
+            .with_context(|| format!("--refine {item}: the tolerance is not a number"))?;
+        tolerance.insert(axis.trim().to_string(), tol);
+    }
+    Ok(knotsweep_server::refine::RefineSpec { tolerance })
 }
 
 fn build_spec(args: &Args) -> Result<Value> {
@@ -185,8 +205,12 @@ pub fn run(args: Args) -> Result<()> {
             }
         };
         bar.finish_and_clear();
+        let refined = match (&args.refine, finished) {
+            (Some(text), true) => refine(&core, id, refine_spec(text)?, &mut signal).await?,
+            _ => true,
+        };
         pool.shutdown().await;
-        if !finished {
+        if !finished || !refined {
             store.close().await;
             bail!("interrupted: run the same command again to resume sweep {id}");
         }
@@ -215,6 +239,13 @@ pub fn run(args: Args) -> Result<()> {
                     .await
                     .map_err(|e| anyhow::anyhow!(describe(e)))?;
                 write_figure(dir, "phase", &svg)?;
+            }
+            if diagram.varied.len() >= 2 {
+                let svg = core
+                    .map_figure(id)
+                    .await
+                    .map_err(|e| anyhow::anyhow!(describe(e)))?;
+                write_figure(dir, "map", &svg)?;
             }
             println!("figures written to {}", dir.display());
         }
@@ -252,6 +283,71 @@ pub fn run(args: Args) -> Result<()> {
         store.close().await;
         Ok(())
     })
+}
+
+/// Runs sweep `id`'s refinement to its end and prints its brackets; false
+/// when interrupted.
+async fn refine(
+    core: &Core,
+    id: i64,
+    spec: knotsweep_server::refine::RefineSpec,
+    signal: &mut std::pin::Pin<&mut impl std::future::Future<Output = ()>>,
+) -> Result<bool> {
+    use knotsweep_server::refine::RefineStatus;
+    let mut view = match core.submit_refinement(id, spec.clone()).await {
+        Err(knotsweep_server::error::CoreError::Conflict(_)) => {
+            eprintln!("sweep {id}'s refinement is running: following it");
+            core.refinement(id)
+                .await
+                .map_err(|e| anyhow::anyhow!(describe(e)))?
+        }
+        other => other.map_err(|e| anyhow::anyhow!(describe(e)))?,
+    };
+    let mut shown = 0;
+    while view.status == RefineStatus::Running {
+        tokio::select! {
+            _ = tokio::time::sleep(Duration::from_millis(300)) => {}
+            _ = signal.as_mut() => return Ok(false),
+        }
+        view = core
+            .refinement(id)
+            .await
+            .map_err(|e| anyhow::anyhow!(describe(e)))?;
+        for p in &view.points[shown.min(view.points.len())..] {
+            let at: Vec<String> = p.params.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            let found = p.outcome.map_or("no outcome".to_string(), |o| format!("{o:?}"));
+            eprintln!("refinement round {}: {}: {found}", view.rounds, at.join(", "));
+        }
+        shown = view.points.len();
+    }
+    if view.status == RefineStatus::Failed {
+        bail!("the refinement failed: {}", view.reason.unwrap_or_default());
+    }
+    for b in &view.brackets {
+        let at: Vec<String> = b.at.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        println!(
+            "{} at {}: {:?} at {} (case {}), {:?} at {} (case {}): {} apart{}",
+            b.axis,
+            at.join(", "),
+            b.low.outcome,
+            b.low.value,
+            b.low.case_id,
+            b.high.outcome,
+            b.high.value,
+            b.high.case_id,
+            b.width,
+            b.reason
+                .as_ref()
+                .map_or(String::new(), |r| format!(" (stopped: {r})"))
+        );
+    }
+    println!(
+        "refinement of sweep {id}: {} brackets, {} cases added in {} rounds",
+        view.brackets.len(),
+        view.points.len(),
+        view.rounds
+    );
+    Ok(true)
 }
 
 pub(crate) fn describe(e: knotsweep_server::error::CoreError) -> String {

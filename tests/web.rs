@@ -790,8 +790,23 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
     let id = submit_sweep(&c, &url, &json!({"base": base, "grid": {"mu": [0.1, 0.15]}})).await;
     let single = submit_sweep(&c, &url, &json!({"base": base})).await;
+    // Two axes: a map (its h = 5 mm points are the first sweep's, cached).
+    let two = submit_sweep(
+        &c,
+        &url,
+        &json!({"base": without(base.clone(), "h"), "grid": {"h": [5e-3, 5.5e-3], "mu": [0.1, 0.15]}}),
+    )
+    .await;
     wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
     wait_sweep(&c, &url, single, Duration::from_secs(120), finished).await;
+    wait_sweep(&c, &url, two, Duration::from_secs(120), finished).await;
+    let (status, _) = post(
+        &c,
+        &format!("{url}/api/sweeps/{two}/refine"),
+        &json!({"tolerance": {"mu": 0.01}}),
+    )
+    .await;
+    assert_eq!(status, reqwest::StatusCode::ACCEPTED);
     let r = c
         .put(format!("{url}/api/sweeps/{id}/measurements"))
         .json(&json!({"csv": "mu,l_k_bar,error\n0.12,116.5,1.5\n0.14,117,2\n"}))
@@ -828,6 +843,12 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
             "case",
             format!("{url}/#/cases/{case_id}"),
             "return document.getElementById('held') !== null && document.querySelector('#plot-f canvas') !== null",
+        ),
+        (
+            "map",
+            format!("{url}/#/sweeps/{two}/map"),
+            "const m = document.getElementById('map'); return m && m.complete && m.naturalWidth > 0 && \
+             document.getElementById('refinement').textContent.includes('done')",
         ),
         (
             "fits",
@@ -924,6 +945,46 @@ async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
         let (status, _) = get_text(&c, &format!("{url}{}", link.as_str().unwrap())).await;
         assert_eq!(status, reqwest::StatusCode::OK, "{link}");
     }
+
+    // The map page: the sweep's two axes by symbol, the tolerance with its unit, the map drawn.
+    browser.page(&pages[4].1, pages[4].2).await;
+    let map = browser
+        .js(
+            "return [document.getElementById('map-summary').textContent, document.getElementById('refinement').textContent, \
+               [...document.querySelectorAll('#refine-fields .unit')].map((u) => u.textContent), document.getElementById('map').naturalWidth, \
+               document.getElementById('brackets').textContent]",
+            json!([]),
+        )
+        .await;
+    assert!(
+        map[0].as_str().unwrap().contains("h (across) and μ (up)"),
+        "{map}"
+    );
+    assert!(map[1].as_str().unwrap().contains("μ to 0.01"), "{map}");
+    assert_eq!(map[2], json!(["m", ""]), "h in m, μ without a unit: {map}");
+    assert!(map[3].as_u64().unwrap() > 500, "{map}");
+    let (_, refined) = get(&c, &format!("{url}/api/sweeps/{two}/refinement")).await;
+    let shown = map[4].as_str().unwrap();
+    for b in refined["brackets"].as_array().unwrap() {
+        assert!(
+            shown.contains(&format!("case {}", b["low"]["case_id"])),
+            "{shown} vs {refined:#}"
+        );
+    }
+    // The sweep page of a two-axis sweep links its map's page.
+    browser
+        .page(
+            &format!("{url}/#/sweeps/{two}"),
+            "return document.getElementById('map-section') && !document.getElementById('map-section').hidden",
+        )
+        .await;
+    let link = browser
+        .js(
+            "return document.getElementById('map-link').getAttribute('href')",
+            json!([]),
+        )
+        .await;
+    assert_eq!(link, json!(format!("#/sweeps/{two}/map")));
 
     // The case page: h in mm, E in Pa, the node count resolved.
     browser.page(&pages[3].1, pages[3].2).await;

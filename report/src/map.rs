@@ -1,6 +1,7 @@
 //! A sweep over two axes as a map (`GET /api/sweeps/{id}/figures/map.svg`):
 //! each grid point's cell coloured by its critical l̄_k, contours of l̄_k
-//! between the points, and the points without an inversion crossed.
+//! between the points, and the points without an inversion crossed; with a
+//! refinement, the cases it added and where the outcome changes.
 use crate::charts::compact;
 use crate::symbols::L_K_BAR;
 use anyhow::{Result, anyhow};
@@ -15,6 +16,14 @@ pub struct MapPoint {
     pub l_k_bar: Option<f64>,
 }
 
+/// A change of outcome on a refined grid line: the two cases bracketing it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapBracket {
+    pub ends: [(f64, f64); 2],
+    /// The ends are within the refinement's tolerance.
+    pub settled: bool,
+}
+
 /// A map: the points of a grid over two axes, with titles.
 pub struct MapFigure {
     pub title: String,
@@ -23,6 +32,10 @@ pub struct MapFigure {
     pub x_label: String,
     pub y_label: String,
     pub points: Vec<MapPoint>,
+    /// Cases a refinement added between the grid's points.
+    pub refined: Vec<MapPoint>,
+    /// Where the outcome changes along refined lines.
+    pub brackets: Vec<MapBracket>,
 }
 
 /// The colour of `t` in 0..1: a perceptually ordered ramp (viridis' ends
@@ -124,6 +137,56 @@ pub fn contour(
     segments
 }
 
+/// Height of the legend's strip under the map, in pixels.
+const LEGEND_HEIGHT: i32 = 52;
+
+/// The colour of a bracket (where a refined line's outcome changes).
+const RED_BRACKET: RGBColor = RGBColor(213, 34, 34);
+
+/// The legend under the map, two entries a row: a glyph and its words, for
+/// each kind of mark the map has.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    figure: &MapFigure,
+) -> Result<()> {
+    let grey = RGBColor(200, 200, 200);
+    let mut entries: Vec<(usize, String)> = vec![(
+        0,
+        format!("a grid point (its cell: its critical {L_K_BAR}; white: contours)"),
+    )];
+    if figure.points.iter().any(|p| p.l_k_bar.is_none()) {
+        entries.push((1, "no inversion (grey)".to_string()));
+    }
+    if !figure.refined.is_empty() {
+        entries.push((
+            2,
+            format!("a case of the refinement (its critical {L_K_BAR}'s colour; grey: none)"),
+        ));
+    }
+    if !figure.brackets.is_empty() {
+        entries.push((3, "the outcome changes between these cases".to_string()));
+    }
+    let style = ("sans-serif", 13).into_font().color(&BLACK);
+    let e = |r: std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>>| r.map_err(|e| anyhow!("{e}"));
+    for (k, (glyph, text)) in entries.iter().enumerate() {
+        let (x, y) = (16 + 372 * (k as i32 % 2), 12 + 22 * (k as i32 / 2));
+        match glyph {
+            0 => e(area.draw(&Circle::new((x + 9, y), 3, BLACK.filled())))?,
+            1 => e(area.draw(&Cross::new((x + 9, y), 6, BLACK.stroke_width(2))))?,
+            2 => {
+                e(area.draw(&Circle::new((x + 9, y), 4, grey.filled())))?;
+                e(area.draw(&Circle::new((x + 9, y), 4, BLACK.stroke_width(1))))?;
+            }
+            _ => e(area.draw(&PathElement::new(
+                vec![(x, y), (x + 18, y)],
+                RED_BRACKET.stroke_width(4),
+            )))?,
+        }
+        e(area.draw_text(text, &style, (x + 26, y - 7)))?;
+    }
+    Ok(())
+}
+
 /// The map as SVG: cells coloured by l̄_k (a colour bar beside), contours at
 /// round levels, grid points as dots, points without an inversion crossed.
 pub fn map_chart(figure: &MapFigure) -> Result<String> {
@@ -150,16 +213,18 @@ pub fn map_chart(figure: &MapFigure) -> Result<String> {
     let (ex, ey) = (edges(&xs), edges(&ys));
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (760, 520)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (760, 580)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
         let height = root.dim_in_pixel().1 as i32;
-        let (area, foot) = root.split_vertically(height - 28);
+        let (area, below) = root.split_vertically(height - 28 - LEGEND_HEIGHT);
+        let (legend, foot) = below.split_vertically(LEGEND_HEIGHT);
+        draw_legend(&legend, figure)?;
         if !figure.caption.is_empty() {
             let style = ("sans-serif", 14).into_font().color(&RGBColor(60, 60, 60));
             foot.draw_text(&figure.caption, &style, (12, 2))
                 .map_err(|e| anyhow!("{e}"))?;
         }
-        let (plot, bar) = area.split_horizontally(660);
+        let (plot, bar) = area.split_horizontally(640);
         let mut chart = ChartBuilder::on(&plot)
             .caption(&figure.title, ("sans-serif", 20))
             .margin(12)
@@ -170,6 +235,8 @@ pub fn map_chart(figure: &MapFigure) -> Result<String> {
         chart
             .configure_mesh()
             .disable_mesh()
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
             .x_desc(&figure.x_label)
             .y_desc(&figure.y_label)
             .x_label_formatter(&|v| compact(*v))
@@ -222,9 +289,7 @@ pub fn map_chart(figure: &MapFigure) -> Result<String> {
                     .filter(|p| p.l_k_bar.is_some())
                     .map(|p| Circle::new((p.x, p.y), 3, BLACK.filled())),
             )
-            .map_err(|e| anyhow!("{e}"))?
-            .label(format!("a point (cell: its critical {L_K_BAR}; white: contours)"))
-            .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.filled()));
+            .map_err(|e| anyhow!("{e}"))?;
         if figure.points.iter().any(|p| p.l_k_bar.is_none()) {
             chart
                 .draw_series(
@@ -234,30 +299,42 @@ pub fn map_chart(figure: &MapFigure) -> Result<String> {
                         .filter(|p| p.l_k_bar.is_none())
                         .map(|p| Cross::new((p.x, p.y), 6, BLACK.stroke_width(2))),
                 )
-                .map_err(|e| anyhow!("{e}"))?
-                .label("no inversion (grey)")
-                .legend(|(x, y)| Cross::new((x + 9, y), 6, BLACK.stroke_width(2)));
+                .map_err(|e| anyhow!("{e}"))?;
         }
-        chart
-            .configure_series_labels()
-            .position(crate::charts::LegendAt::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| anyhow!("{e}"))?;
+        if !figure.refined.is_empty() {
+            chart
+                .draw_series(figure.refined.iter().map(|p| {
+                    let fill = p.l_k_bar.map_or(grey, |v| ramp(t(v)));
+                    EmptyElement::at((p.x, p.y))
+                        + Circle::new((0, 0), 4, fill.filled())
+                        + Circle::new((0, 0), 4, BLACK.stroke_width(1))
+                }))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
+        if !figure.brackets.is_empty() {
+            chart
+                .draw_series((figure.brackets.iter()).map(|b| {
+                    PathElement::new(
+                        b.ends.to_vec(),
+                        RED_BRACKET.stroke_width(if b.settled { 4 } else { 2 }),
+                    )
+                }))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
         // The colour bar.
         let mut scale = ChartBuilder::on(&bar)
             .margin_top(44)
             .margin_bottom(60)
-            .margin_right(40)
-            .y_label_area_size(0)
-            .right_y_label_area_size(40)
+            .margin_right(48)
+            .y_label_area_size(60)
             .build_cartesian_2d(0.0..1.0, lo..lo + span)
             .map_err(|e| anyhow!("{e}"))?;
         scale
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
             .y_desc(format!("critical {L_K_BAR}"))
             .y_label_formatter(&|v| compact(*v))
             .draw()
@@ -314,11 +391,29 @@ mod tests {
             x_label: "h (mm)".into(),
             y_label: "μ".into(),
             points,
+            refined: vec![MapPoint {
+                x: 2.2,
+                y: 0.25,
+                l_k_bar: None,
+            }],
+            brackets: vec![MapBracket {
+                ends: [(2.0, 0.25), (2.4, 0.25)],
+                settled: true,
+            }],
         })
         .unwrap();
         assert!(svg.contains("no inversion (grey)") && svg.contains("held fixed: n = 3"));
-        // Nine cells: eight coloured and one grey (besides the colour bar's bands and the legend's box).
-        assert_eq!(svg.matches("fill=\"#C8C8C8\"").count(), 1, "the grey cell");
+        assert!(
+            svg.contains("the outcome changes between these cases"),
+            "the bracket's legend"
+        );
+        // Nine cells: eight coloured and one grey, the refined case without an inversion and the
+        // legend's ring (besides the colour bar's bands).
+        assert_eq!(
+            svg.matches("fill=\"#C8C8C8\"").count(),
+            3,
+            "the grey cell, point and ring"
+        );
     }
 
     #[test]

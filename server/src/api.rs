@@ -16,6 +16,7 @@
 //! | `GET /api/sweeps/{id}/phase-diagram` | inversion points of the sweep's cases |
 //! | `GET /api/sweeps/{id}/phase-diagram.csv` | the same, one row per point (`report::tables`) |
 //! | `GET`, `PUT /api/sweeps/{id}/measurements` | measured inversions beside the sweep (`crate::measurements`) |
+//! | `POST /api/sweeps/{id}/refine`, `GET /api/sweeps/{id}/refinement` | bisect the grid lines where the outcome changes (`crate::refine`) |
 //! | `POST /api/fits`, `GET /api/fits`, `GET /api/fits/{id}` | fit a parameter to measured inversions (`crate::fit`) |
 //! | `GET /api/cases/{id}`, `/series.csv`, `/snapshots` | a case, its series as CSV, its snapshots |
 //! | `GET /api/cases/{id}/snapshots.zip` | its snapshots for ParaView (`.pvd` over `.vtp` files, docs/PARAVIEW.md) |
@@ -33,6 +34,7 @@ use crate::extract::{Id, MAX_PAGE, Page, Paging, Submission};
 use crate::fit::{Evaluation, FitSpec, FitStatus, FitView, MeasuredPoint, Simulated};
 use crate::guard::{self, AllowedHosts};
 use crate::measurements::MeasurementsBody;
+use crate::refine::{Bracket, End, Outcome, RefineSpec, RefineStatus, RefinedPoint, RefinementView};
 use crate::spec::{Limits, Preset, SweepSpec};
 use crate::views::*;
 use axum::extract::{ConnectInfo, DefaultBodyLimit, FromRef, Path, Query, Request, State};
@@ -104,6 +106,8 @@ pub fn router(app: App) -> Router {
             "/api/sweeps/{id}/measurements",
             get(get_measurements).put(put_measurements),
         )
+        .route("/api/sweeps/{id}/refine", post(refine_sweep))
+        .route("/api/sweeps/{id}/refinement", get(get_refinement))
         .route("/api/fits", post(submit_fit).get(list_fits))
         .route("/api/fits/{id}", get(get_fit))
         .route("/api/cases/{id}", get(get_case))
@@ -155,13 +159,14 @@ pub fn openapi(token: bool) -> OpenApiDoc {
     ),
     paths(
         submit_sweep, list_sweeps, get_sweep, sweep_cases, sweep_figure, case_figure, pause_sweep, resume_sweep, cancel_sweep, sweep_events,
-        phase_diagram, phase_diagram_csv, get_measurements, put_measurements, submit_fit, list_fits, get_fit, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
+        phase_diagram, phase_diagram_csv, get_measurements, put_measurements, refine_sweep, get_refinement, submit_fit, list_fits, get_fit, get_case, case_series_csv, case_snapshots, case_snapshots_zip, list_presets, get_limits, list_materials, healthz, metrics
     ),
     components(schemas(
         SweepSpec, ErrorBody, Preset, SweepStatus, SweepSummary, SweepDetail, SweepCaseView,
         SubmitResponse, PhaseDiagram, PhasePoint, UncertaintyView, InversionPoint, CaseProgress, CaseDetail, ResultView,
         LogLineView, Health, SweepEvent, RunningCase, ServiceLimits, MaterialView,
-        MeasurementsBody, FitSpec, MeasuredPoint, FitView, FitStatus, Evaluation, Simulated
+        MeasurementsBody, FitSpec, MeasuredPoint, FitView, FitStatus, Evaluation, Simulated,
+        RefineSpec, RefinementView, RefineStatus, Outcome, End, Bracket, RefinedPoint
     )),
     modifiers(&Extras),
     tags(
@@ -592,10 +597,47 @@ async fn get_measurements(State(app): State<App>, Id(id): Id) -> Result<Json<Vec
     Ok(Json(app.core.measurements(id).await?))
 }
 
+/// Refine a sweep's map: along each axis given a tolerance, every grid line
+/// where the outcome changes (an inversion or none, a clean snap or not) is
+/// bisected over queued cases (one sweep each) until the two cases
+/// bracketing the change are within the tolerance. Starts once the sweep is
+/// done; follow it at `GET /api/sweeps/{id}/refinement`. A new refinement
+/// replaces the one before (409 while that one runs).
+#[utoipa::path(post, path = "/api/sweeps/{id}/refine", tag = "sweeps", params(("id" = i64, Path)),
+    request_body(content = RefineSpec),
+    responses(
+        (status = 202, description = "Accepted: the bisection runs", body = RefinementView),
+        (status = 400, description = "Malformed JSON", body = ErrorBody),
+        (status = 401, description = "Token required", body = ErrorBody),
+        (status = 404, body = ErrorBody),
+        (status = 409, description = "A refinement of the sweep is running", body = ErrorBody),
+        (status = 422, description = "Invalid values: the fields and reasons", body = ErrorBody)
+    ),
+    security((), ("bearer" = [])))]
+async fn refine_sweep(
+    State(app): State<App>,
+    Id(id): Id,
+    body: axum::body::Bytes,
+) -> Result<Response, ApiError> {
+    let spec: RefineSpec = Core::parse_json(&body)?;
+    let view = app.core.submit_refinement(id, spec).await?;
+    let location = HeaderValue::from_str(&format!("/api/sweeps/{id}/refinement")).expect("ascii");
+    Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(view)).into_response())
+}
+
+/// A sweep's refinement: its status, the cases it added and every bracket
+/// of a change of outcome (404 when the sweep has none).
+#[utoipa::path(get, path = "/api/sweeps/{id}/refinement", tag = "sweeps", params(("id" = i64, Path)),
+    responses((status = 200, body = RefinementView), (status = 404, body = ErrorBody)))]
+async fn get_refinement(State(app): State<App>, Id(id): Id) -> Result<Json<RefinementView>, ApiError> {
+    Ok(Json(app.core.refinement(id).await?))
+}
+
 /// Fit a parameter (mu by default) to measured inversions: the search runs
 /// over queued cases (one sweep per point and evaluation); follow it at
 /// `GET /api/fits/{id}` until its `status` is `done` (with `value` and
-/// `interval`) or `failed` (with `reason`). Fits live in the serving process.
+/// `interval`) or `failed` (with `reason`). Fits are stored: one running when
+/// its server stops starts again when one starts (its cases are cached).
 #[utoipa::path(post, path = "/api/fits", tag = "fits",
     request_body(content = FitSpec),
     responses(
@@ -612,17 +654,17 @@ async fn submit_fit(State(app): State<App>, body: axum::body::Bytes) -> Result<R
     Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(fit)).into_response())
 }
 
-/// The fits of this process, oldest first.
+/// Every fit, oldest first.
 #[utoipa::path(get, path = "/api/fits", tag = "fits", responses((status = 200, body = Vec<FitView>)))]
-async fn list_fits(State(app): State<App>) -> Json<Vec<FitView>> {
-    Json(app.core.list_fits())
+async fn list_fits(State(app): State<App>) -> Result<Json<Vec<FitView>>, ApiError> {
+    Ok(Json(app.core.list_fits().await?))
 }
 
 /// A fit: its status, evaluations and, when done, `value` and `interval`.
 #[utoipa::path(get, path = "/api/fits/{id}", tag = "fits", params(("id" = i64, Path)),
     responses((status = 200, body = FitView), (status = 404, body = ErrorBody)))]
 async fn get_fit(State(app): State<App>, Id(id): Id) -> Result<Json<FitView>, ApiError> {
-    Ok(Json(app.core.fit(id)?))
+    Ok(Json(app.core.fit(id).await?))
 }
 
 /// A case: parameters, status, result, series, log lines.

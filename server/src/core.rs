@@ -32,8 +32,6 @@ pub struct Core {
     simplified: Arc<Mutex<SimplifiedSnaps>>,
     /// Slots for the requests' CPU-bound work, one per core.
     computing: Computing,
-    /// The fits of this process (`crate::fit`).
-    pub(crate) fits: Arc<Mutex<crate::fit::Fits>>,
 }
 
 /// The simplified model's snaps, computed or under way, by (n, bits of h).
@@ -48,7 +46,6 @@ impl Core {
             started: Instant::now(),
             simplified: Arc::default(),
             computing: Computing::per_core(),
-            fits: Arc::default(),
         }
     }
 
@@ -406,6 +403,7 @@ impl Core {
                 })
             })
             .collect();
+        let (refined, brackets) = self.map_refinement(id, [a.as_str(), b.as_str()], scale).await?;
         let figure = report::map::MapFigure {
             title: format!(
                 "Critical {} over {} and {}",
@@ -420,6 +418,8 @@ impl Core {
             x_label: label(&a),
             y_label: label(&b),
             points,
+            refined,
+            brackets,
         };
         report::map::map_chart(&figure).map_err(|e| CoreError::Figure(e.to_string()))
     }

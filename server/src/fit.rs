@@ -4,9 +4,9 @@
 //! A fit is built on sweeps: each evaluation at a value p of the parameter is
 //! one sweep per measured point (the point's parameters over the fit's base,
 //! the parameter on the grid), so its cases are queued, cached, certified and
-//! shown like any other. The fit itself ([`Fit`], the state of the search) lives
-//! in the serving process: a restarted server forgets its fits, and the same
-//! fit submitted again reuses every case already computed.
+//! shown like any other. The fit's view (its evaluations and result) is
+//! stored at every step; a fit left running when its server stopped starts
+//! again when one starts, reusing every case already computed.
 //!
 //! The search solves r(p) = 0 for the weighted residual
 //! r(p) = Σ_i (l_i(p) - m_i) / s_i², s_i² = σ_i² + u_i², where l_i(p) is the
@@ -448,15 +448,23 @@ pub fn fit_field(field: &str, parameter: &str, point: usize, params: &Map<String
     }
 }
 
-/// The fits of this process, by id.
-#[derive(Debug, Default)]
-pub struct Fits {
-    last_id: i64,
-    fits: BTreeMap<i64, FitView>,
-}
-
 /// How often a fit looks at its evaluation sweeps.
 const POLL: Duration = Duration::from_millis(500);
+
+/// A fit's status as stored beside its view.
+fn status_word(status: FitStatus) -> &'static str {
+    match status {
+        FitStatus::Running => "running",
+        FitStatus::Done => "done",
+        FitStatus::Failed => "failed",
+    }
+}
+
+/// A stored view, parsed.
+pub(crate) fn parse_view<T: serde::de::DeserializeOwned>(what: &str, json: &str) -> Result<T, CoreError> {
+    serde_json::from_str(json)
+        .map_err(|e| CoreError::Store(knotsweep_worker::StoreError::Corrupt(format!("{what}: {e}"))))
+}
 
 impl Core {
     /// Parses a JSON body (a fit's, measured points'): 400 for malformed
@@ -472,7 +480,7 @@ impl Core {
     }
 
     /// Checks a fit (every point's cases at both ends of the range must be
-    /// valid), registers it and starts its search; answers at once.
+    /// valid), stores it and starts its search; answers at once.
     pub async fn submit_fit(&self, spec: FitSpec) -> Result<FitView, CoreError> {
         check_fit(&spec).map_err(CoreError::Invalid)?;
         let mut errors = Vec::new();
@@ -488,72 +496,104 @@ impl Core {
             errors.dedup();
             return Err(CoreError::Invalid(errors));
         }
-        let view = {
-            let mut fits = self.fits.lock().expect("fits");
-            fits.last_id += 1;
-            let view = FitView {
-                id: fits.last_id,
-                name: spec.name.clone(),
-                status: FitStatus::Running,
-                parameter: spec.parameter.clone(),
-                range: spec.range,
-                value: None,
-                interval: None,
-                chi_squared: None,
-                reason: None,
-                sweeps: Vec::new(),
-                evaluations: Vec::new(),
-                spec: serde_json::to_value(&spec).expect("spec serialises"),
-            };
-            fits.fits.insert(view.id, view.clone());
-            view
+        let mut view = FitView {
+            id: 0,
+            name: spec.name.clone(),
+            status: FitStatus::Running,
+            parameter: spec.parameter.clone(),
+            range: spec.range,
+            value: None,
+            interval: None,
+            chi_squared: None,
+            reason: None,
+            sweeps: Vec::new(),
+            evaluations: Vec::new(),
+            spec: serde_json::to_value(&spec).expect("spec serialises"),
         };
+        let json = serde_json::to_string(&view).expect("view serialises");
+        view.id = self.store().create_fit("running", &json).await?;
+        self.save_fit(&view).await?;
         tracing::info!(fit_id = view.id, parameter = %spec.parameter, points = spec.points.len(), "fit accepted");
-        let core = self.clone();
-        let id = view.id;
-        tokio::spawn(async move {
-            let end = core.run_fit(id, &spec).await;
-            if let Err(reason) = &end {
-                tracing::warn!(fit_id = id, %reason, "fit failed");
-            }
-            core.update_fit(id, |fit| match end {
-                Ok((value, interval, chi_squared)) => {
-                    fit.status = FitStatus::Done;
-                    fit.value = Some(value);
-                    fit.interval = Some(interval);
-                    fit.chi_squared = Some(chi_squared);
-                }
-                Err(reason) => {
-                    fit.status = FitStatus::Failed;
-                    fit.reason = Some(reason);
-                }
-            });
-        });
+        self.spawn_fit(view.clone(), spec);
         Ok(view)
     }
 
-    /// A fit of this process; 404 for an unknown id.
-    pub fn fit(&self, id: i64) -> Result<FitView, CoreError> {
-        let fits = self.fits.lock().expect("fits");
-        fits.fits
-            .get(&id)
-            .cloned()
-            .ok_or_else(|| CoreError::NotFound(format!("fit {id}")))
+    /// Runs fit `view`'s search in the background, storing each step.
+    fn spawn_fit(&self, mut view: FitView, spec: FitSpec) {
+        let core = self.clone();
+        tokio::spawn(async move {
+            let end = core.run_fit(&mut view, &spec).await;
+            if let Err(reason) = &end {
+                tracing::warn!(fit_id = view.id, %reason, "fit failed");
+            }
+            match end {
+                Ok((value, interval, chi_squared)) => {
+                    view.status = FitStatus::Done;
+                    view.value = Some(value);
+                    view.interval = Some(interval);
+                    view.chi_squared = Some(chi_squared);
+                }
+                Err(reason) => {
+                    view.status = FitStatus::Failed;
+                    view.reason = Some(reason);
+                }
+            }
+            if let Err(e) = core.save_fit(&view).await {
+                tracing::error!(fit_id = view.id, error = %e, "storing the fit's end failed");
+            }
+        });
     }
 
-    /// The fits of this process, oldest first.
-    pub fn list_fits(&self) -> Vec<FitView> {
-        self.fits.lock().expect("fits").fits.values().cloned().collect()
+    /// Takes up the fits left running by a server that stopped: each search
+    /// starts again from its specification (its cases are cached).
+    pub async fn resume_fits(&self) -> Result<usize, CoreError> {
+        let mut resumed = 0;
+        for (id, status, json) in self.store().list_fits().await? {
+            if status != status_word(FitStatus::Running) {
+                continue;
+            }
+            let mut view: FitView = parse_view(&format!("fit {id}"), &json)?;
+            let spec: FitSpec = serde_json::from_value(view.spec.clone()).map_err(|e| {
+                CoreError::Store(knotsweep_worker::StoreError::Corrupt(format!(
+                    "fit {id}'s spec: {e}"
+                )))
+            })?;
+            view.id = id;
+            view.evaluations.clear();
+            view.sweeps.clear();
+            tracing::info!(fit_id = id, "fit taken up again");
+            self.spawn_fit(view, spec);
+            resumed += 1;
+        }
+        Ok(resumed)
     }
 
-    fn update_fit(&self, id: i64, change: impl FnOnce(&mut FitView)) {
-        if let Some(fit) = self.fits.lock().expect("fits").fits.get_mut(&id) {
-            change(fit);
+    /// A fit; 404 for an unknown id.
+    pub async fn fit(&self, id: i64) -> Result<FitView, CoreError> {
+        match self.store().get_fit(id).await? {
+            Some(json) => parse_view(&format!("fit {id}"), &json),
+            None => Err(CoreError::NotFound(format!("fit {id}"))),
         }
     }
 
-    /// The search of fit `id` to its end: the value, interval and χ², or why not.
-    async fn run_fit(&self, id: i64, spec: &FitSpec) -> Result<(f64, [f64; 2], f64), String> {
+    /// Every fit, oldest first.
+    pub async fn list_fits(&self) -> Result<Vec<FitView>, CoreError> {
+        (self.store().list_fits().await?.iter())
+            .map(|(id, _, json)| parse_view(&format!("fit {id}"), json))
+            .collect()
+    }
+
+    async fn save_fit(&self, view: &FitView) -> Result<(), CoreError> {
+        let json = serde_json::to_string(view).expect("view serialises");
+        Ok(self
+            .store()
+            .update_fit(view.id, status_word(view.status), &json)
+            .await?)
+    }
+
+    /// The search of fit `view` to its end (each evaluation stored as it
+    /// lands): the value, interval and χ², or why not.
+    async fn run_fit(&self, view: &mut FitView, spec: &FitSpec) -> Result<(f64, [f64; 2], f64), String> {
         let measured = spec.points.iter().map(|p| (p.l_k_bar, p.error)).collect();
         let tolerance = spec.tolerance.unwrap_or((spec.range[1] - spec.range[0]) / 400.0);
         let mut search = Search::new(spec.range, tolerance, measured);
@@ -561,21 +601,21 @@ impl Core {
         loop {
             match step {
                 Step::Evaluate(values) => {
-                    let results = self.evaluate(id, spec, &values).await?;
+                    let (sweeps, results) = self.evaluate(view.id, spec, &values).await?;
+                    view.sweeps.extend(sweeps);
                     let recorded: Vec<(f64, Simulations)> = (values.iter().zip(&results))
                         .map(|(&value, simulated)| (value, pair(simulated)))
                         .collect();
                     step = search.record(recorded);
-                    self.update_fit(id, |fit| {
-                        for (&value, points) in values.iter().zip(results) {
-                            let residual = search.residual_at(value);
-                            fit.evaluations.push(Evaluation {
-                                value,
-                                residual,
-                                points,
-                            });
-                        }
-                    });
+                    for (&value, points) in values.iter().zip(results) {
+                        let residual = search.residual_at(value);
+                        view.evaluations.push(Evaluation {
+                            value,
+                            residual,
+                            points,
+                        });
+                    }
+                    self.save_fit(view).await.map_err(|e| e.to_string())?;
                 }
                 Step::Done {
                     value,
@@ -588,26 +628,22 @@ impl Core {
     }
 
     /// Every point simulated at each of `values`: one sweep per point, its
-    /// results once the sweep is done.
-    async fn evaluate(&self, id: i64, spec: &FitSpec, values: &[f64]) -> Result<Vec<Vec<Simulated>>, String> {
+    /// results once the sweep is done. Returns the sweeps and, per value, the points.
+    async fn evaluate(
+        &self,
+        id: i64,
+        spec: &FitSpec,
+        values: &[f64],
+    ) -> Result<(Vec<i64>, Vec<Vec<Simulated>>), String> {
         let mut sweep_ids = Vec::new();
         for sweep in fit_sweeps(spec, &format!("fit {id}"), values) {
             let raw = serde_json::to_value(&sweep).expect("spec serialises");
             let submitted = self.submit(sweep, &raw, None).await.map_err(|e| e.to_string())?;
             sweep_ids.push(submitted.sweep.summary.id);
         }
-        self.update_fit(id, |fit| fit.sweeps.extend(&sweep_ids));
         let mut results = vec![Vec::new(); values.len()];
-        for sweep_id in sweep_ids {
-            loop {
-                let detail = self.sweep(sweep_id).await.map_err(|e| e.to_string())?;
-                match detail.summary.status {
-                    SweepStatus::Done => break,
-                    SweepStatus::Cancelled => return Err(format!("its sweep {sweep_id} was cancelled")),
-                    _ => tokio::time::sleep(POLL).await,
-                }
-            }
-            let pd = self.phase_diagram(sweep_id).await.map_err(|e| e.to_string())?;
+        for &sweep_id in &sweep_ids {
+            let pd = self.finished_phase_diagram(sweep_id).await?;
             for (k, point) in pd.points.iter().enumerate().take(values.len()) {
                 results[k].push(Simulated {
                     case_id: point.case_id,
@@ -617,7 +653,21 @@ impl Core {
                 });
             }
         }
-        Ok(results)
+        Ok((sweep_ids, results))
+    }
+
+    /// Sweep `id`'s phase diagram once the sweep is done; why not when it
+    /// was cancelled.
+    pub(crate) async fn finished_phase_diagram(&self, id: i64) -> Result<crate::views::PhaseDiagram, String> {
+        loop {
+            let detail = self.sweep(id).await.map_err(|e| e.to_string())?;
+            match detail.summary.status {
+                SweepStatus::Done => break,
+                SweepStatus::Cancelled => return Err(format!("its sweep {id} was cancelled")),
+                _ => tokio::time::sleep(POLL).await,
+            }
+        }
+        self.phase_diagram(id).await.map_err(|e| e.to_string())
     }
 }
 

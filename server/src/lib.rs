@@ -7,6 +7,7 @@
 //! - [`core`]: the typed operations (submit, query, control, phase diagram,
 //!   metrics) over the store (`knotsweep_worker::Store`);
 //! - [`fit`]: fits of a parameter to measured inversions, over sweeps;
+//!   [`refine`]: a map's grid lines bisected where the outcome changes;
 //! - [`api`]: axum handlers, thin adapters over the core (their inputs read by
 //!   the extractors of `extract`), and the OpenAPI document; [`views`] and
 //!   [`error`]: the JSON they return, built from the store's records;
@@ -25,6 +26,7 @@ pub mod guard;
 mod http;
 pub mod measurements;
 pub mod openapi;
+pub mod refine;
 pub mod spec;
 mod strict_json;
 pub mod views;
@@ -152,6 +154,10 @@ pub async fn start(config: ServerConfig, listener: tokio::net::TcpListener) -> a
         config.limits,
         pool.as_ref().map(|p| p.handle()),
     );
+    let resumed = core.resume_searches().await?;
+    if resumed > 0 {
+        tracing::info!(resumed, "fits and refinements taken up again");
+    }
     let (shutdown, shutdown_rx) = watch::channel(false);
     let reaper = spawn_reaper(dyn_store.clone(), config.lease, shutdown_rx.clone());
     let feeds = events::Feeds::new(

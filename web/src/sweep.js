@@ -25,6 +25,7 @@ export async function sweepPage(main, id) {
         (CSV: the varied parameter in SI units, <code>l_k_bar</code>, <code>error</code>)</label>
         <input id="measured-file" type="file" accept=".csv,text/csv"> <span id="measured-note" class="hint" role="status"></span></form></section>
     <section aria-labelledby="map-h" id="map-section" hidden><h2 id="map-h">Map over both axes</h2>
+      <p><a id="map-link" href="#/sweeps/${esc(id)}/map">the map's page: refine where the outcome changes</a></p>
       <img id="map" class="map" alt="the critical l_k bar over the sweep's two axes"></section>
     <section aria-labelledby="cases-h"><h2 id="cases-h">Cases</h2>
       <div class="table-wrap"><table><thead><tr><th scope="col">Case</th><th scope="col">Parameters</th><th scope="col">Status</th>
@@ -59,7 +60,7 @@ export async function sweepPage(main, id) {
   source = new EventSource(`/api/sweeps/${id}/events`);
   let pending = null;
   const later = () => {
-    if (!location.hash.startsWith(`#/sweeps/${id}`)) { source.close(); return; }
+    if (location.hash.replace(/\/$/, "") !== `#/sweeps/${id}`) { source.close(); return; }
     clearTimeout(pending);
     pending = setTimeout(() => refresh(state), 300);
   };

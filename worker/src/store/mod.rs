@@ -394,6 +394,24 @@ pub trait Store: Send + Sync + 'static {
     /// The measured points put beside sweep `id`, if any.
     async fn measurements(&self, id: i64) -> StoreResult<Option<String>>;
 
+    // --- fits and maps' refinements (searches over sweeps, kept as their JSON views) ---
+
+    /// Stores a new fit's view (JSON) and status word; returns its id.
+    async fn create_fit(&self, status: &str, view: &str) -> StoreResult<i64>;
+    /// Replaces fit `id`'s status and view; `NotFound` for an unknown fit.
+    async fn update_fit(&self, id: i64, status: &str, view: &str) -> StoreResult<()>;
+    /// Fit `id`'s view, if any.
+    async fn get_fit(&self, id: i64) -> StoreResult<Option<String>>;
+    /// Every fit as (id, status, view), oldest first.
+    async fn list_fits(&self) -> StoreResult<Vec<(i64, String, String)>>;
+    /// Puts sweep `id`'s refinement (view and status), replacing any before;
+    /// `NotFound` for an unknown sweep.
+    async fn put_refinement(&self, id: i64, status: &str, view: &str) -> StoreResult<()>;
+    /// Sweep `id`'s refinement view, if any.
+    async fn refinement(&self, id: i64) -> StoreResult<Option<String>>;
+    /// Every refinement whose status is `status`, as (sweep id, view).
+    async fn refinements_with_status(&self, status: &str) -> StoreResult<Vec<(i64, String)>>;
+
     // --- cases (the API) ---
 
     async fn get_case(&self, id: i64) -> StoreResult<Option<CaseRecord>>;

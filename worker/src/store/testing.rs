@@ -253,6 +253,40 @@ pub(crate) async fn sweeps(store: &dyn Store) {
         store.set_measurements(b.id + 100, "[]").await,
         Err(StoreError::NotFound)
     ));
+
+    // Fits: ids in order, a view replaced whole, unknown ids.
+    let f1 = store.create_fit("running", "{\"a\":1}").await.unwrap();
+    let f2 = store.create_fit("running", "{}").await.unwrap();
+    assert!(f2 > f1);
+    store.update_fit(f1, "done", "{\"a\":2}").await.unwrap();
+    assert_eq!(store.get_fit(f1).await.unwrap().as_deref(), Some("{\"a\":2}"));
+    assert_eq!(store.get_fit(f2 + 100).await.unwrap(), None);
+    assert!(matches!(
+        store.update_fit(f2 + 100, "done", "{}").await,
+        Err(StoreError::NotFound)
+    ));
+    let listed: Vec<(i64, String)> = (store.list_fits().await.unwrap().into_iter())
+        .map(|(id, status, _)| (id, status))
+        .collect();
+    assert_eq!(
+        listed,
+        vec![(f1, "done".to_string()), (f2, "running".to_string())]
+    );
+
+    // Refinements: one per sweep, the last put, found by status.
+    assert_eq!(store.refinement(a.id).await.unwrap(), None);
+    store.put_refinement(a.id, "running", "[1]").await.unwrap();
+    store.put_refinement(b.id, "running", "[2]").await.unwrap();
+    store.put_refinement(a.id, "done", "[3]").await.unwrap();
+    assert_eq!(store.refinement(a.id).await.unwrap().as_deref(), Some("[3]"));
+    assert_eq!(
+        store.refinements_with_status("running").await.unwrap(),
+        vec![(b.id, "[2]".to_string())]
+    );
+    assert!(matches!(
+        store.put_refinement(b.id + 100, "running", "[]").await,
+        Err(StoreError::NotFound)
+    ));
 }
 
 /// Claims and leases: the claim's lease and log line, heartbeats that store

@@ -18,6 +18,7 @@ use std::fmt::Debug;
 use std::future::Future;
 
 mod leases;
+mod searches;
 mod sweeps;
 
 pub(super) use leases::{claim_query, claim_statement};
@@ -218,6 +219,34 @@ impl<B: Backend> Store for SqlStore<B> {
             .fetch_optional(&self.pool)
             .await?;
         row.map(|r| r.text("points")).transpose()
+    }
+
+    async fn create_fit(&self, status: &str, view: &str) -> StoreResult<i64> {
+        self.insert_fit(status, view).await
+    }
+
+    async fn update_fit(&self, id: i64, status: &str, view: &str) -> StoreResult<()> {
+        self.replace_fit(id, status, view).await
+    }
+
+    async fn get_fit(&self, id: i64) -> StoreResult<Option<String>> {
+        self.fit_view(id).await
+    }
+
+    async fn list_fits(&self) -> StoreResult<Vec<(i64, String, String)>> {
+        self.fit_views().await
+    }
+
+    async fn put_refinement(&self, id: i64, status: &str, view: &str) -> StoreResult<()> {
+        self.upsert_refinement(id, status, view).await
+    }
+
+    async fn refinement(&self, id: i64) -> StoreResult<Option<String>> {
+        self.refinement_view(id).await
+    }
+
+    async fn refinements_with_status(&self, status: &str) -> StoreResult<Vec<(i64, String)>> {
+        self.refinement_views(status).await
     }
 
     async fn case_logs(&self, id: i64) -> StoreResult<Vec<LogLine>> {

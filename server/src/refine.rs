@@ -14,7 +14,7 @@ use crate::error::CoreError;
 use crate::fit::parse_view;
 use crate::spec::{FieldError, SweepSpec};
 use crate::views::{SweepCaseView, SweepStatus};
-use knotsweep_worker::store::SnapshotChoice;
+use knotsweep_worker::store::{CaseStatus, SnapshotChoice};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 use solver::case::Range;
@@ -224,16 +224,9 @@ fn outcome(c: &SweepCaseView) -> Option<Outcome> {
     match &c.inversion {
         Some(i) if i.f_bar_after < i.f_bar_before => Some(Outcome::CleanSnap),
         Some(_) => Some(Outcome::NotClean),
-        None if word(&c.status) == "completed" => Some(Outcome::NoInversion),
+        None if c.status == CaseStatus::COMPLETED => Some(Outcome::NoInversion),
         None => None,
     }
-}
-
-/// A status as its word.
-fn word<T: Serialize>(status: &T) -> String {
-    (serde_json::to_value(status).ok())
-        .and_then(|v| v.as_str().map(str::to_string))
-        .unwrap_or_default()
 }
 
 fn status_word(status: RefineStatus) -> &'static str {

@@ -22,15 +22,31 @@ pub struct Args {
     /// (L/h), `check` (the rods of the acceptance check), `rates` (the paper's rod
     /// pulled faster, physical inertia), `lengths` (the inversion against L/h
     /// at L = 1 m, n = 2 ... 5, and Fig. 7's h sweep), `all` (those five),
-    /// `map` (L/h 625 ... 5000 by n 2 ... 6 by mu 0.05 ... 0.5, rubber and a
-    /// nylon line: 120 cases) or `corners` (the map's 16 corners).
+    /// `map` (`ratios` by `ns` by `mus`, rubber and a nylon line: by default
+    /// L/h 625 ... 5000 by n 2 ... 6 by mu 0.05 ... 0.5, 120 cases) or
+    /// `corners` (the map's corners: 16 by default).
     #[arg(long, default_value = "all")]
     table: String,
-    /// With `map` or `corners`: each case of L/h at most this also under the
-    /// reference pull, and the adaptive pull's deviation from it (a reference
-    /// pull costs about (L/h / 625)^2 times the paper's rod's).
+    /// With `map` or `corners`: the corners of L/h at most this also under
+    /// the reference pull, and the adaptive pull's deviation from it (a
+    /// reference pull costs about (L/h / 625)^2 times the paper's rod's over
+    /// the same pull).
     #[arg(long)]
     reference_up_to: Option<f64>,
+    /// With `reference_up_to`: only the corners of n at least this (a knot of
+    /// more turns inverts sooner in the pull, so that its reference pull is
+    /// shorter).
+    #[arg(long, default_value_t = 0)]
+    reference_from_n: u32,
+    /// The map's L/h axis (its first and last values are the corners).
+    #[arg(long, value_delimiter = ',', default_values_t = MAP_RATIOS)]
+    ratios: Vec<f64>,
+    /// The map's n axis.
+    #[arg(long, value_delimiter = ',', default_values_t = MAP_NS)]
+    ns: Vec<u32>,
+    /// The map's mu axis.
+    #[arg(long, value_delimiter = ',', default_values_t = MAP_MUS)]
+    mus: Vec<f64>,
     /// Cases run at once.
     #[arg(long, default_value_t = 1)]
     jobs: usize,
@@ -38,9 +54,23 @@ pub struct Args {
     /// `knotsweep` from before the default node count grew with L/h.
     #[arg(long)]
     explicit_nodes: bool,
-    /// Keep each case's JSON report in this directory.
+    /// Keep each case's JSON report and CPU time in this directory, in files
+    /// named by its flags.
     #[arg(long)]
     keep: Option<PathBuf>,
+    /// With `keep`: cases already measured there (by an earlier run of any
+    /// table, the same flags) are read back instead of run again; their CPU
+    /// is that earlier run's.
+    #[arg(long)]
+    resume: bool,
+    /// With `keep` (not `map` or `corners`): only the cases measured there
+    /// already, none run (a table of a run cut short).
+    #[arg(long)]
+    kept_only: bool,
+    /// With `lengths`: also write its figure (the event's eq. 11 l_k bar and
+    /// the knot's own length against L/h) as SVG here.
+    #[arg(long)]
+    svg: Option<PathBuf>,
 }
 
 /// One rod: a label and its `knotsweep run` flags.
@@ -106,31 +136,52 @@ impl MapCase {
     }
 }
 
-/// The map's cases (`corners`: the first and last of every axis).
-fn map_cases(corners: bool) -> Vec<MapCase> {
-    let ends = |len: usize| -> Vec<usize> {
-        if corners {
-            vec![0, len - 1]
-        } else {
-            (0..len).collect()
-        }
-    };
-    let mut cases = Vec::new();
-    for material in 0..MAP_MATERIALS.len() {
-        for &r in &ends(MAP_RATIOS.len()) {
-            for &n in &ends(MAP_NS.len()) {
-                for &m in &ends(MAP_MUS.len()) {
-                    cases.push(MapCase {
-                        material,
-                        ratio: MAP_RATIOS[r],
-                        n: MAP_NS[n],
-                        mu: MAP_MUS[m],
-                    });
+/// The map's axes: L/h, n and mu.
+struct Axes<'a> {
+    ratios: &'a [f64],
+    ns: &'a [u32],
+    mus: &'a [f64],
+}
+
+impl Axes<'_> {
+    /// The map's cases (`corners`: the first and last of every axis), both
+    /// materials.
+    fn cases(&self, corners: bool) -> Vec<MapCase> {
+        let ends = |len: usize| -> Vec<usize> {
+            match len {
+                0 => vec![],
+                _ if corners => {
+                    let mut e = vec![0, len - 1];
+                    e.dedup();
+                    e
+                }
+                _ => (0..len).collect(),
+            }
+        };
+        let mut cases = Vec::new();
+        for material in 0..MAP_MATERIALS.len() {
+            for &r in &ends(self.ratios.len()) {
+                for &n in &ends(self.ns.len()) {
+                    for &m in &ends(self.mus.len()) {
+                        cases.push(MapCase {
+                            material,
+                            ratio: self.ratios[r],
+                            n: self.ns[n],
+                            mu: self.mus[m],
+                        });
+                    }
                 }
             }
         }
+        cases
     }
-    cases
+
+    /// Whether `c` is one of the map's corners.
+    fn corner(&self, c: &MapCase) -> bool {
+        let end = |v: f64, axis: &[f64]| axis.first() == Some(&v) || axis.last() == Some(&v);
+        let ns: Vec<f64> = self.ns.iter().map(|&n| f64::from(n)).collect();
+        end(c.ratio, self.ratios) && end(f64::from(c.n), &ns) && end(c.mu, self.mus)
+    }
 }
 
 /// The tables' rods; each table starts with the paper's rod, its unit of cost.
@@ -239,9 +290,21 @@ struct Measured {
     report: Value,
 }
 
-/// Runs `knotsweep run` with `flags` and a report file; returns its CPU time
-/// and report.
-fn measure(binary: &Path, flags: &[String], out: &Path) -> Result<Measured> {
+/// Runs `knotsweep run` with `flags` and a report file `out`; returns its CPU
+/// time and report, and keeps the CPU time beside the report (`out` with
+/// the extension `cpu`). With `resume`, a report and CPU time already there
+/// are read back instead.
+fn measure(binary: &Path, flags: &[String], out: &Path, resume: bool) -> Result<Measured> {
+    let cpu_file = out.with_extension("cpu");
+    if resume && out.is_file() {
+        if let Ok(cpu) = std::fs::read_to_string(&cpu_file) {
+            let report = serde_json::from_str(&std::fs::read_to_string(out)?)?;
+            return Ok(Measured {
+                cpu: cpu.trim().parse()?,
+                report,
+            });
+        }
+    }
     let child = Command::new(binary)
         .arg("run")
         .args(flags)
@@ -265,10 +328,26 @@ fn measure(binary: &Path, flags: &[String], out: &Path) -> Result<Measured> {
     let cpu = seconds(usage.ru_utime) + seconds(usage.ru_stime);
     let text = std::fs::read_to_string(out)
         .with_context(|| format!("knotsweep run {} wrote no report", flags.join(" ")))?;
+    std::fs::write(&cpu_file, format!("{cpu}\n"))?;
     Ok(Measured {
         cpu,
         report: serde_json::from_str(&text)?,
     })
+}
+
+/// A case's report file in `dir`: named by its flags.
+fn report_file(dir: &Path, flags: &[String]) -> PathBuf {
+    let name: String = (flags.iter().map(|f| f.trim_start_matches('-')))
+        .collect::<Vec<_>>()
+        .join("_")
+        .chars()
+        .map(|c| match c {
+            '.' => 'p',
+            c if c.is_ascii_alphanumeric() || c == '-' => c,
+            _ => '_',
+        })
+        .collect();
+    dir.join(format!("{name}.json"))
 }
 
 /// A report's steps by phase (settle, approach, snap, after, reference, ...;
@@ -354,14 +433,14 @@ pub fn run(args: Args) -> Result<String> {
     let dir = tempfile::tempdir()?;
     let keep = args.keep.clone().unwrap_or_else(|| dir.path().to_path_buf());
     std::fs::create_dir_all(&keep)?;
+    let jobs = args.jobs.max(1);
     if let name @ ("map" | "corners") = args.table.as_str() {
-        return map(
-            &binary,
-            name,
-            args.reference_up_to,
-            args.jobs.max(1),
-            &keep.join(name),
-        );
+        let axes = Axes {
+            ratios: &args.ratios,
+            ns: &args.ns,
+            mus: &args.mus,
+        };
+        return map(&binary, name, &axes, &args, &keep);
     }
     let names: Vec<&str> = match args.table.as_str() {
         "all" => vec!["check", "materials", "slenderness", "rates", "lengths"],
@@ -389,7 +468,13 @@ pub fn run(args: Args) -> Result<String> {
                 r.flags.extend(["--nodes".to_string(), k.to_string()]);
             }
         }
-        let measured = run_all(&binary, &rods, args.jobs.max(1), &keep.join(name))?;
+        if args.kept_only {
+            rods.retain(|r| {
+                let out = report_file(&keep, &r.flags);
+                out.is_file() && out.with_extension("cpu").is_file()
+            });
+        }
+        let measured = run_all(&binary, &rods, jobs, &keep, args.resume || args.kept_only)?;
         let unit = measured[0].cpu;
         writeln!(doc, "\n### {name}\n")?;
         writeln!(
@@ -405,27 +490,209 @@ pub fn run(args: Args) -> Result<String> {
         for (r, m) in rods.iter().zip(&measured) {
             writeln!(doc, "{}", row(r, m, unit))?;
         }
+        if name == "lengths" {
+            let points = length_points(&rods, &measured)?;
+            doc.push_str(&lengths_table(&points)?);
+            if let Some(path) = &args.svg {
+                std::fs::write(path, lengths_svg(&points)?)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                writeln!(doc, "\nFigure: `{}`.", path.display())?;
+            }
+        }
     }
     Ok(doc)
 }
 
-/// The map (or its corners) as a table, each case's CPU against the paper's
-/// rod of the same n measured in the same run; those of L/h at most
-/// `reference_up_to` against the reference pull too.
-fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir: &Path) -> Result<String> {
-    let cases = map_cases(name == "corners");
-    let compared: Vec<usize> = (0..cases.len())
-        .filter(|&i| reference_up_to.is_some_and(|r| cases[i].ratio <= r))
-        .collect();
-    let ns: Vec<u32> = MAP_NS
+/// A case of the `lengths` table (L = 1 m): n, L/h, the event's eq. 11 l_k
+/// bar and the knot's own length, or, without one, the own length where the
+/// pull stopped.
+struct LengthPoint {
+    n: u32,
+    ratio: f64,
+    event: Option<(f64, f64)>,
+    stopped_at: f64,
+    cpu: f64,
+    restarts: u64,
+}
+
+/// The `lengths` table's points, read from each rod's flags and report.
+fn length_points(rods: &[Rod], measured: &[Measured]) -> Result<Vec<LengthPoint>> {
+    let flag = |r: &Rod, f: &str| -> Result<f64> {
+        let at = r
+            .flags
+            .iter()
+            .position(|x| x == f)
+            .context(format!("{} has no {f}", r.label))?;
+        Ok(r.flags[at + 1].parse()?)
+    };
+    let mut points = Vec::new();
+    for (r, m) in rods.iter().zip(measured) {
+        let inv = &m.report["inversion"];
+        let last = m.report["series"].as_array().and_then(|s| s.last());
+        points.push(LengthPoint {
+            n: flag(r, "--n")? as u32,
+            ratio: 1.0 / flag(r, "--h")?,
+            event: inv["l_k_bar"].as_f64().zip(inv["l_k_arc_bar"].as_f64()),
+            stopped_at: last.and_then(|s| s["l_k_arc_bar"].as_f64()).unwrap_or(f64::NAN),
+            cpu: m.cpu,
+            restarts: m.report["stats"]["restarts"].as_u64().unwrap_or(0),
+        });
+    }
+    Ok(points)
+}
+
+/// The `lengths` table as n by L/h, each cell the event's eq. 11 l_k bar /
+/// the knot's own length.
+fn lengths_table(points: &[LengthPoint]) -> Result<String> {
+    let mut ratios: Vec<f64> = points.iter().map(|p| p.ratio).collect();
+    ratios.sort_by(f64::total_cmp);
+    ratios.dedup();
+    let mut ns: Vec<u32> = points.iter().map(|p| p.n).collect();
+    ns.sort_unstable();
+    ns.dedup();
+    let mut doc = String::from(
+        "\nEach cell: the event's eq. 11 l_k bar / the knot's own length (L = 1 m, mu = 0.1).\n\n| n |",
+    );
+    for r in &ratios {
+        write!(doc, " L/h {r:.1} |")?;
+    }
+    writeln!(doc, "\n|---|{}", "---|".repeat(ratios.len()))?;
+    for &n in &ns {
+        write!(doc, "| {n} |")?;
+        for r in &ratios {
+            let cell = match points.iter().find(|p| p.n == n && p.ratio == *r) {
+                Some(LengthPoint {
+                    event: Some((l, own)),
+                    ..
+                }) => format!("{l:.2} / {own:.2}"),
+                Some(p) => format!("none (own length {:.1} at the stop)", p.stopped_at),
+                None => String::new(),
+            };
+            write!(doc, " {cell} |")?;
+        }
+        writeln!(doc)?;
+    }
+    write!(
+        doc,
+        "\nEach cell: CPU over the paper's rod of the same n (its L/h 625 case), restarts.\n\n| n |"
+    )?;
+    for r in &ratios {
+        write!(doc, " L/h {r:.1} |")?;
+    }
+    writeln!(doc, "\n|---|{}", "---|".repeat(ratios.len()))?;
+    for &n in &ns {
+        write!(doc, "| {n} |")?;
+        let unit = points
+            .iter()
+            .find(|p| p.n == n && (p.ratio - 625.0).abs() < 1e-6)
+            .map(|p| p.cpu);
+        for r in &ratios {
+            let cell = match (points.iter().find(|p| p.n == n && p.ratio == *r), unit) {
+                (Some(p), Some(u)) => format!("{:.1}x, {}", p.cpu / u, p.restarts),
+                _ => String::new(),
+            };
+            write!(doc, " {cell} |")?;
+        }
+        writeln!(doc)?;
+    }
+    Ok(doc)
+}
+
+/// The `lengths` figure: for each n the knot's own length (solid) and eq.
+/// 11's l_k bar (dashed) at the event against L/h, log-log, with Fig. 7's h
+/// sweep (n = 3, L = 1 m, h 1.6 ... 3.2 mm) marked.
+fn lengths_svg(points: &[LengthPoint]) -> Result<String> {
+    use plotters::style::{Color, RGBColor};
+    use report::charts::{LegendAt, Plot, Series, Style, plots_svg};
+    const COLOURS: [RGBColor; 4] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+    ];
+    let mut ns: Vec<u32> = points.iter().map(|p| p.n).collect();
+    ns.sort_unstable();
+    ns.dedup();
+    let curve = |n: u32, pick: fn(&(f64, f64)) -> f64, at_most: f64| -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = (points.iter())
+            .filter(|p| p.n == n && p.ratio <= at_most)
+            .filter_map(|p| p.event.as_ref().map(|e| (p.ratio, pick(e))))
+            .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        v
+    };
+    let mut series = Vec::new();
+    for (i, &n) in ns.iter().enumerate() {
+        let colour = COLOURS[i % COLOURS.len()].to_rgba();
+        series.push(Series {
+            label: format!("n = {n}, own length"),
+            points: curve(n, |e| e.1, f64::INFINITY),
+            colour,
+            style: Style::LineDots,
+        });
+        series.push(Series {
+            label: format!("n = {n}, eq. 11 l_k bar"),
+            points: curve(n, |e| e.0, f64::INFINITY),
+            colour,
+            style: Style::Dashed,
+        });
+    }
+    let fig7: Vec<(f64, f64)> = [|e: &(f64, f64)| e.1, |e: &(f64, f64)| e.0]
         .into_iter()
-        .filter(|n| cases.iter().any(|c| c.n == *n))
+        .flat_map(|pick| curve(3, pick, 625.0 + 1e-6))
         .collect();
+    series.push(Series {
+        label: "Fig. 7's h sweep (n = 3, h 3.2 ... 1.6 mm)".into(),
+        points: fig7,
+        colour: RGBColor(0, 0, 0).to_rgba(),
+        style: Style::Dots { filled: false },
+    });
+    let stopped: Vec<String> = (points.iter())
+        .filter(|p| p.event.is_none())
+        .map(|p| format!("n = {} at {:.0}", p.n, p.ratio))
+        .collect();
+    let plot = Plot {
+        title: "The inversion against the slenderness (rubber, L = 1 m, mu = 0.1)".into(),
+        caption: if stopped.is_empty() {
+            String::new()
+        } else {
+            format!("No inversion (L/h): {}", stopped.join(", "))
+        },
+        x_label: "L/h".into(),
+        y_label: "at the event: l_k bar (eq. 11), (arc - l_c)/h".into(),
+        series,
+        log: true,
+        markers: vec![(625.0, "the paper's rod".into())],
+        legend: LegendAt::LowerRight,
+        ..Plot::default()
+    };
+    plots_svg(&[plot], (900, 600))
+}
+
+/// The map (or its corners) as a table, each case's CPU against the paper's
+/// rod of the same n measured in the same run; the corners of L/h at most
+/// `reference_up_to` (and n at least `reference_from_n`) against the
+/// reference pull too. Runs the paper's rods, then the corners, then the rest.
+fn map(binary: &Path, name: &str, axes: &Axes, args: &Args, dir: &Path) -> Result<String> {
+    let mut cases = axes.cases(name == "corners");
+    cases.sort_by_key(|c| !axes.corner(c));
+    let compared: Vec<usize> = (0..cases.len())
+        .filter(|&i| {
+            let c = &cases[i];
+            axes.corner(c)
+                && c.n >= args.reference_from_n
+                && args.reference_up_to.is_some_and(|r| c.ratio <= r)
+        })
+        .collect();
+    let mut ns: Vec<u32> = cases.iter().map(|c| c.n).collect();
+    ns.sort_unstable();
+    ns.dedup();
     let mut rods: Vec<Rod> = ns
         .iter()
         .map(|n| rod(&format!("the paper's rod, n = {n}"), &format!("--n {n}")))
         .collect();
-    for c in &cases {
+    let corners = cases.iter().filter(|c| axes.corner(c)).count();
+    for c in &cases[..corners] {
         rods.push(Rod {
             label: c.label(),
             flags: c.flags(false),
@@ -437,26 +704,43 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
             flags: cases[i].flags(true),
         });
     }
-    let measured = run_all(binary, &rods, jobs, dir)?;
+    for c in &cases[corners..] {
+        rods.push(Rod {
+            label: c.label(),
+            flags: c.flags(false),
+        });
+    }
+    let measured = run_all(binary, &rods, args.jobs.max(1), dir, args.resume)?;
     let (units, rest) = measured.split_at(ns.len());
-    let (adaptive, references) = rest.split_at(cases.len());
+    let (corner_runs, rest) = rest.split_at(corners);
+    let (references, others) = rest.split_at(compared.len());
+    let adaptive: Vec<&Measured> = corner_runs.iter().chain(others).collect();
     let mut doc = String::new();
-    let reference_flag = reference_up_to.map_or(String::new(), |r| format!(" --reference-up-to {r}"));
+    let list = |v: Vec<String>| v.join(",");
+    let mut command = format!(
+        "cargo run --release -p xtask -- bench-rods --table {name} --ratios {} --ns {} --mus {}",
+        list(axes.ratios.iter().map(f64::to_string).collect()),
+        list(axes.ns.iter().map(u32::to_string).collect()),
+        list(axes.mus.iter().map(f64::to_string).collect()),
+    );
+    if let Some(r) = args.reference_up_to {
+        write!(command, " --reference-up-to {r}")?;
+        if args.reference_from_n > 0 {
+            write!(command, " --reference-from-n {}", args.reference_from_n)?;
+        }
+    }
+    writeln!(doc, "\n### {name}\n\n`{command}`\n")?;
     writeln!(
         doc,
-        "\n### {name}\n\n`cargo run --release -p xtask -- bench-rods --table {name}{reference_flag}`\n"
+        "| the paper's rod | steps | restarts | CPU (s) | event l_k bar | own length |"
     )?;
-    writeln!(
-        doc,
-        "| the paper's rod | steps | CPU (s) | event l_k bar | own length |"
-    )?;
-    writeln!(doc, "|---|---|---|---|---|")?;
+    writeln!(doc, "|---|---|---|---|---|---|")?;
     for (n, m) in ns.iter().zip(units) {
         let (l_k, own) = event_lengths(&m.report);
         writeln!(
             doc,
-            "| n = {n} | {} | {:.2} | {l_k} | {own} |",
-            m.report["stats"]["steps"], m.cpu
+            "| n = {n} | {} | {} | {:.2} | {l_k} | {own} |",
+            m.report["stats"]["steps"], m.report["stats"]["restarts"], m.cpu
         )?;
     }
     writeln!(
@@ -469,7 +753,7 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
     let (mut worst_restarts, mut worst_cost, mut worst_deviation) = (0, 0.0f64, 0.0f64);
-    let (mut none, mut unclean) = (0, 0);
+    let (mut none, mut unclean, mut both_none) = (0, 0, 0);
     for (i, (c, m)) in cases.iter().zip(adaptive).enumerate() {
         let r = &m.report;
         let unit = units[ns.iter().position(|n| *n == c.n).expect("a unit per n")].cpu;
@@ -478,6 +762,7 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
         let clean = event.map_or("-", |e| if e["clean"] == true { "yes" } else { "no" });
         none += usize::from(event.is_none());
         unclean += usize::from(clean == "no");
+        // One stage per case: its restarts are those of its event.
         let restarts = r["stats"]["restarts"].as_u64().unwrap_or(0);
         worst_restarts = worst_restarts.max(restarts);
         worst_cost = worst_cost.max(m.cpu / unit);
@@ -485,14 +770,17 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
             Some(reference) => {
                 let ours = r["inversion"]["l_k_bar"].as_f64();
                 let theirs = reference.report["inversion"]["l_k_bar"].as_f64();
-                let deviation = ours.zip(theirs).map(|(a, b)| (a - b).abs() / b);
+                let deviation = ours.zip(theirs).map(|(a, b)| (a - b).abs() / b.abs());
                 if let Some(d) = deviation {
                     worst_deviation = worst_deviation.max(d);
                 }
-                (
-                    theirs.map_or("none".to_string(), |l| format!("{l:.2}")),
-                    deviation.map_or("-".to_string(), |d| format!("{:.2} %", 100.0 * d)),
-                )
+                both_none += usize::from(ours.is_none() && theirs.is_none());
+                let text = match (deviation, ours, theirs) {
+                    (Some(d), ..) => format!("{:.2} %", 100.0 * d),
+                    (None, None, None) => "none either".to_string(),
+                    _ => "one none".to_string(),
+                };
+                (theirs.map_or("none".to_string(), |l| format!("{l:.2}")), text)
             }
             None => ("-".to_string(), "-".to_string()),
         };
@@ -514,14 +802,15 @@ fn map(binary: &Path, name: &str, reference_up_to: Option<f64>, jobs: usize, dir
     }
     writeln!(
         doc,
-        "\n{} cases: at most {worst_restarts} restarts, at most {worst_cost:.1} times the paper's rod of the same n, \
-         {none} without an event, {unclean} not clean{}.",
+        "\n{} cases: at most {worst_restarts} restarts, at most {worst_cost:.1} times the paper's rod of \
+         the same n, {none} without an event, {unclean} not clean{}.",
         cases.len(),
         if compared.is_empty() {
             String::new()
         } else {
             format!(
-                ", on the {} compared the adaptive pull's inversion at most {:.2} % from the reference pull's",
+                "; on the {} corners compared, the adaptive pull's inversion at most {:.2} % from the reference \
+                 pull's ({both_none} without one under either)",
                 compared.len(),
                 100.0 * worst_deviation
             )
@@ -541,18 +830,18 @@ fn event_lengths(report: &Value) -> (String, String) {
     (text("l_k_bar"), text("l_k_arc_bar"))
 }
 
-/// Runs every rod, `jobs` at a time, in order.
-fn run_all(binary: &Path, rods: &[Rod], jobs: usize, dir: &Path) -> Result<Vec<Measured>> {
+/// Runs every rod, `jobs` at a time, in order (with `resume`, reading back
+/// those measured in `dir` already).
+fn run_all(binary: &Path, rods: &[Rod], jobs: usize, dir: &Path, resume: bool) -> Result<Vec<Measured>> {
     std::fs::create_dir_all(dir)?;
     let mut results: Vec<Option<Measured>> = (0..rods.len()).map(|_| None).collect();
     for (chunk_start, chunk) in rods.chunks(jobs).enumerate().map(|(i, c)| (i * jobs, c)) {
         let outcomes: Vec<Result<Measured>> = std::thread::scope(|s| {
             let handles: Vec<_> = chunk
                 .iter()
-                .enumerate()
-                .map(|(i, r)| {
-                    let out = dir.join(format!("{}.json", chunk_start + i));
-                    s.spawn(move || measure(binary, &r.flags, &out))
+                .map(|r| {
+                    let out = report_file(dir, &r.flags);
+                    s.spawn(move || measure(binary, &r.flags, &out, resume))
                 })
                 .collect();
             handles
@@ -561,8 +850,9 @@ fn run_all(binary: &Path, rods: &[Rod], jobs: usize, dir: &Path) -> Result<Vec<M
                 .collect()
         });
         for (i, outcome) in outcomes.into_iter().enumerate() {
-            eprintln!("{}: done", rods[chunk_start + i].label);
-            results[chunk_start + i] = Some(outcome?);
+            let m = outcome?;
+            eprintln!("{}: {:.1} s", rods[chunk_start + i].label, m.cpu);
+            results[chunk_start + i] = Some(m);
         }
     }
     Ok(results

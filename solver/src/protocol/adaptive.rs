@@ -25,6 +25,13 @@
 //! span in the report says which ([`Outcome`]). The last restart runs the
 //! reference pull through the stretch ([`Phase::Fallback`]): to the event
 //! and `SLOW_AFTER` past it, or, refuted, to the stage's end.
+//!
+//! On a rod longer than its knot the slow phases also move the clamps by
+//! what the straight tails' elastic stretch takes up ([`stretch_factor`]),
+//! so that the knot is pulled at the paper's rod's pace: at F bar 0.17 a
+//! rubber tail of 4 375 radii absorbs three quarters of the clamps' travel,
+//! and the slow phases would cost four times the paper's rod's steps. The
+//! paper's rod has no tails: its clamps move at `pull_speed` exactly.
 use crate::case::{CaseParams, Protocol};
 use crate::measurements::Sample;
 use crate::words::display_as_word;
@@ -101,6 +108,15 @@ pub(super) const CHECKPOINTS: usize = 24;
 /// Restarts from a checkpoint a stage may take: the last one falls back to
 /// the reference pull ([`Phase::Fallback`]).
 pub const MAX_RESTARTS: u32 = 2;
+/// The stretch of the tails is read from the samples within this much l_k
+/// bar of the last (the force's slope against l_k bar, least squares over
+/// about 20 samples: F bar's sample-to-sample noise, about 0.002 in a
+/// slipping knot, moves the stretch's share by under 0.2).
+const STRETCH_WINDOW: f64 = 10.0;
+/// The fewest samples a slope is read from.
+const STRETCH_SAMPLES: usize = 4;
+/// The largest factor on the slow phases' clamp speed for the tails' stretch.
+pub(super) const STRETCH_CAP: f64 = 4.0;
 /// Damping rate (1/s, over the case's time unit) while relaxing and settling.
 pub(super) const RELAX_DAMPING: f64 = 20.0;
 
@@ -271,6 +287,39 @@ pub(super) fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
     (began - last.l_k_arc_bar > SMEARED_SPAN).then_some((began, last.l_k_arc_bar))
 }
 
+/// The factor on the slow phases' clamp speed that keeps the knot's end of
+/// the tails moving at `pull_speed`: the straight tails, `tails` radii
+/// beyond the knot, stretch by (tails / 4) F bar radii (strain F / EA =
+/// F bar / 4, EA / EI = 4 / h^2), so that of the clamps' travel dl (l_k bar)
+/// the knot takes dl (1 + dS/dl), dS/dl = (tails / 4) dF bar / dl_k bar
+/// read from the last samples of `series` ([`STRETCH_WINDOW`]); the factor
+/// is 1 / (1 + dS/dl), from 1 to [`STRETCH_CAP`]. Exactly 1 without tails
+/// (the paper's rod) or without enough samples.
+pub(super) fn stretch_factor(series: &[Sample], tails: f64) -> f64 {
+    let Some(last) = series.last().filter(|_| tails > 0.0) else {
+        return 1.0;
+    };
+    let window: Vec<&Sample> = (series.iter().rev())
+        .take_while(|s| (s.l_k_bar - last.l_k_bar).abs() <= STRETCH_WINDOW)
+        .collect();
+    if window.len() < STRETCH_SAMPLES {
+        return 1.0;
+    }
+    let count = window.len() as f64;
+    let mean_l = window.iter().map(|s| s.l_k_bar).sum::<f64>() / count;
+    let mean_f = window.iter().map(|s| s.f_bar).sum::<f64>() / count;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for s in &window {
+        sxy += (s.l_k_bar - mean_l) * (s.f_bar - mean_f);
+        sxx += (s.l_k_bar - mean_l).powi(2);
+    }
+    if sxx <= 0.0 {
+        return 1.0;
+    }
+    let knot_share = 1.0 + 0.25 * tails * sxy / sxx;
+    1.0 / knot_share.clamp(1.0 / STRETCH_CAP, 1.0)
+}
+
 /// A fast approach's checkpoints of state `T`, each with the knot's own
 /// length where it was taken, and where (l_k bar) the next is due.
 pub(super) struct Checkpoints<T> {
@@ -342,6 +391,34 @@ mod tests {
         );
         // Steady tightening: 10 % over the window.
         assert_eq!(smeared_snap(&series(|l| 0.2 - 0.001 * (300.0 - l))), None);
+    }
+
+    /// A force rising by 0.0006 per l_k bar of tightening, about a rubber
+    /// rod's of L/h 5000 at F bar 0.16: tails of 4 375 radii take 0.66 of the
+    /// clamps' travel, the knot 0.34. Without tails the factor is 1 to the
+    /// bit; a force falling with the pull (a snap) or flat leaves it 1, and a
+    /// steeper rise (0.0007: 0.77 in the tails) is capped.
+    #[test]
+    fn the_slow_pull_speeds_up_by_the_tails_stretch() {
+        let pulled = |slope: f64| -> Vec<Sample> {
+            (0..30)
+                .map(|i| 100.0 - 0.5 * f64::from(i))
+                .map(|l_k_bar| Sample {
+                    l_k_bar,
+                    f_bar: 0.16 + slope * (100.0 - l_k_bar),
+                    ..Sample::default()
+                })
+                .collect()
+        };
+        let rising = pulled(6e-4);
+        let expected = 1.0 / (1.0 - 4375.0 / 4.0 * 6e-4);
+        assert!((stretch_factor(&rising, 4375.0) - expected).abs() < 1e-9);
+        assert!((expected - 2.91).abs() < 0.01, "{expected}");
+        assert_eq!(stretch_factor(&rising, 0.0).to_bits(), 1.0f64.to_bits());
+        assert_eq!(stretch_factor(&pulled(-7e-4), 4375.0), 1.0);
+        assert!((stretch_factor(&pulled(0.0), 4375.0) - 1.0).abs() < 1e-12);
+        assert_eq!(stretch_factor(&pulled(7e-4), 4375.0), STRETCH_CAP);
+        assert_eq!(stretch_factor(&rising[..3], 4375.0), 1.0);
     }
 
     /// Checkpoints are found back along the stage, either way.

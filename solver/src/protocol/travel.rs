@@ -283,10 +283,19 @@ impl Case<'_> {
     }
 
     /// Both clamps (or, on springs, both grips) moving along the stage at the
-    /// phase's speed at `l_k_bar`.
+    /// phase's speed at `l_k_bar`; the slow phases' by what the tails'
+    /// stretch takes up ([`adaptive::stretch_factor`]).
     fn drive(&mut self, travel: &Travel, l_k_bar: f64) {
         let pulled = travel.way.along(travel.phase_start, l_k_bar);
-        let speed = travel.phase.speed(pulled) * self.params.clamp_speed() * travel.way.0;
+        let stretch = match travel.phase {
+            Phase::Snap | Phase::Fallback => {
+                let spec = self.params.knot_spec();
+                let tails = (spec.length - spec.knot_length()) / self.params.h;
+                adaptive::stretch_factor(&self.report.series[travel.first_sample..], tails)
+            }
+            _ => 1.0,
+        };
+        let speed = travel.phase.speed(pulled) * stretch * self.params.clamp_speed() * travel.way.0;
         let rod = &mut self.world.rods[0];
         if let [start, finish] = &mut rod.springs[..] {
             start.velocity = -speed;

@@ -234,6 +234,13 @@ pub struct PhasePoint {
     /// F bar and H bar around it, clean).
     #[schema(value_type = Vec<Object>)]
     pub events: Vec<Value>,
+    /// A bend's holding force: the largest F bar before its rods parted
+    /// (its `slip_through` event's), or the largest it held when they held
+    /// to the end; null for a knot in one rod or before the result.
+    pub holding_force_bar: Option<f64>,
+    /// A bend's rods still hold each other at the end; null for a knot in
+    /// one rod or before the result.
+    pub tied: Option<bool>,
     /// Whether the loading stayed quasi-static (kinetic over elastic energy
     /// against its limit); null before the result, or for results stored
     /// before it was measured.
@@ -836,6 +843,9 @@ impl PhaseDiagram {
                             .twin
                             .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
                         hysteresis: summary_field(point.case, "hysteresis"),
+                        holding_force_bar: summary_field(point.case, "holding_force_bar")
+                            .and_then(|v| v.as_f64()),
+                        tied: summary_field(point.case, "tied").and_then(|v| v.as_bool()),
                         events: summary_field(point.case, "events")
                             .and_then(|v| v.as_array().cloned())
                             .unwrap_or_default(),

@@ -163,6 +163,8 @@ impl StoredResult {
             "events": report.events,
             "hysteresis": report.hysteresis,
             "quasi_static": report.quasi_static,
+            "holding_force_bar": report.holding_force_bar,
+            "tied": report.tied,
             "scaling": report.scaling,
         });
         let wall = report.stats.wall_time;

@@ -542,12 +542,12 @@ mod tests {
             ..CaseParams::default()
         };
         assert_eq!(refusal(overhand_word).0, "braid_word");
-        let unknown: Result<CaseParams, _> = serde_json::from_str(r#"{"knot": "granny"}"#);
+        let unknown: Result<CaseParams, _> = serde_json::from_str(r#"{"knot": "granny_square"}"#);
         assert!(
             unknown
                 .unwrap_err()
                 .to_string()
-                .contains("unknown variant `granny`")
+                .contains("unknown variant `granny_square`")
         );
         let short = CaseParams {
             length: 0.3,

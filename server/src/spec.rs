@@ -781,10 +781,18 @@ mod tests {
                 .iter()
                 .all(|c| c.params.h == 1.6e-3 && c.params.mu == 0.1)
         );
+        let bends = expand(&spec(serde_json::json!({"preset": "bends"})), &l).unwrap();
+        assert_eq!(bends.varied, ["knot", "mu"]);
+        let points: Vec<(String, f64)> = (bends.cases.iter())
+            .map(|c| (c.params.knot_label(), c.params.mu))
+            .collect();
+        assert_eq!(points.len(), 20);
+        assert_eq!(points[0], ("reef".to_string(), 0.1));
+        assert_eq!(points[19], ("grief".to_string(), 0.5));
         let bad = spec(serde_json::json!({"grid": {"knot": [
             "figure_eight",
             {"knot": "overhand", "mu": 0.2},
-            "granny"
+            "granny_square"
         ]}}));
         assert_eq!(fields(expand(&bad, &l)), ["grid.knot[1].mu", "grid.knot[2]"]);
         let link = spec(serde_json::json!({"grid": {"knot": [

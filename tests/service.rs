@@ -270,6 +270,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
             "hysteresis",
             "twist",
             "knots",
+            "bends",
             "materials"
         ]
     );

@@ -118,6 +118,8 @@ fn label_text(label: SnapshotLabel) -> String {
     let event = |kind| match kind {
         EventKind::Inversion => "inversion",
         EventKind::FlipBack => "flip back",
+        EventKind::Snap => "snap",
+        EventKind::SlipThrough => "slip through",
     };
     match label {
         SnapshotLabel::Relaxed => "relaxed start".to_string(),
@@ -129,6 +131,7 @@ fn label_text(label: SnapshotLabel) -> String {
             StageKind::Soft => "pulling on springs",
         }
         .to_string(),
+        SnapshotLabel::Set => "the bend set, its tails let go".to_string(),
         SnapshotLabel::Event(when, kind) => match when {
             EventWhen::Near => format!("approaching the {}", event(kind)),
             EventWhen::Before => format!("just before the {}", event(kind)),

@@ -60,7 +60,7 @@ pub struct SweepSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// A preset name: `fig7`, `fig9`, `fig11`, `hysteresis`, `twist`,
-    /// `knots` or `materials` (see `GET /api/presets`).
+    /// `knots`, `bends` or `materials` (see `GET /api/presets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preset: Option<String>,
     /// Case parameters common to every case (a partial `CaseParams`).
@@ -196,6 +196,20 @@ pub fn presets() -> Vec<Preset> {
                     serde_json::json!({"knot": "braid", "braid_word": "s1^3 s2 s1^-1 s2"}),
                 ])
                 .collect(),
+        ),
+        grid(
+            "bends",
+            "Bends: two rods tied by the reef, granny, thief and grief knots, pulled by their standing ends, the \
+             tails free, until tight or until they slip apart: holding force against mu (Patil et al., Science \
+             2020), h = 1.6 mm, mu = 0.1 ... 0.5",
+            serde_json::json!({"h": 1.6e-3}),
+            vec![
+                (
+                    KNOT_AXIS,
+                    ["reef", "granny", "thief", "grief"].map(Value::from).to_vec(),
+                ),
+                ("mu", numbers(&[0.1, 0.2, 0.3, 0.4, 0.5])),
+            ],
         ),
         make(
             "materials",
@@ -767,10 +781,18 @@ mod tests {
                 .iter()
                 .all(|c| c.params.h == 1.6e-3 && c.params.mu == 0.1)
         );
+        let bends = expand(&spec(serde_json::json!({"preset": "bends"})), &l).unwrap();
+        assert_eq!(bends.varied, ["knot", "mu"]);
+        let points: Vec<(String, f64)> = (bends.cases.iter())
+            .map(|c| (c.params.knot_label(), c.params.mu))
+            .collect();
+        assert_eq!(points.len(), 20);
+        assert_eq!(points[0], ("reef".to_string(), 0.1));
+        assert_eq!(points[19], ("grief".to_string(), 0.5));
         let bad = spec(serde_json::json!({"grid": {"knot": [
             "figure_eight",
             {"knot": "overhand", "mu": 0.2},
-            "granny"
+            "granny_square"
         ]}}));
         assert_eq!(fields(expand(&bad, &l)), ["grid.knot[1].mu", "grid.knot[2]"]);
         let link = spec(serde_json::json!({"grid": {"knot": [

@@ -239,6 +239,13 @@ pub struct PhasePoint {
     /// F bar and H bar around it, clean).
     #[schema(value_type = Vec<Object>)]
     pub events: Vec<Event>,
+    /// A bend's holding force: the largest F bar before its rods parted
+    /// (its `slip_through` event's), or the largest it held when they held
+    /// to the end; null for a knot in one rod or before the result.
+    pub holding_force_bar: Option<f64>,
+    /// A bend's rods still hold each other at the end; null for a knot in
+    /// one rod or before the result.
+    pub tied: Option<bool>,
     /// Whether the loading stayed quasi-static (kinetic over elastic energy
     /// against its limit); null before the result, or for results stored
     /// before it was measured.
@@ -848,6 +855,8 @@ impl PhaseDiagram {
                             .twin
                             .map(|t| UncertaintyView::new(&point.case.case, &t.case)),
                         hysteresis: details(point.case).and_then(|d| d.hysteresis),
+                        holding_force_bar: details(point.case).and_then(|d| d.holding_force_bar),
+                        tied: details(point.case).and_then(|d| d.tied),
                         events: details(point.case).map(|d| d.events.clone()).unwrap_or_default(),
                         quasi_static: details(point.case).and_then(|d| d.quasi_static),
                     }

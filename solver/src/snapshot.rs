@@ -36,6 +36,10 @@ pub struct Snapshot {
     /// before they were recorded).
     #[serde(default)]
     pub contacts: Vec<SnapshotContact>,
+    /// Node counts of the rods whose nodes `points` lists one rod after the
+    /// other (a bend's two); empty for one rod.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rods: Vec<usize>,
 }
 
 /// A loaded contact of a snapshot: the closest points on the two segments (m),
@@ -61,10 +65,11 @@ pub struct SnapshotContact {
 const STICK_MARGIN: f64 = 1e-6;
 
 impl Snapshot {
-    /// A snapshot of the world's (first) rod at simulated time `time`.
+    /// A snapshot of the world's rods at simulated time `time` (a bend's
+    /// rods one after the other, `rods` giving their node counts).
     pub fn capture(world: &World, label: SnapshotLabel, l_k_bar: f64, time: f64) -> Self {
-        let rod = &world.rods[0];
-        let points = rod.positions();
+        let rods = &world.rods;
+        let points: Vec<Vector3<f64>> = rods.iter().flat_map(Rod::positions).collect();
         let contacts = world
             .contacts()
             .iter()
@@ -72,17 +77,26 @@ impl Snapshot {
             .filter(|(_, f)| f.norm() > 0.0)
             .map(|(c, f)| SnapshotContact::new(c, f, &points))
             .collect();
+        let per_node = |f: &dyn Fn(&Rod, usize) -> f64| -> Vec<f32> {
+            rods.iter()
+                .flat_map(|rod| ends_repeated(rod, &|i| f(rod, i)))
+                .collect()
+        };
         Self {
             label,
             l_k_bar,
             time,
             points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),
-            twist_rate: ends_repeated(rod, &|i| rod.twist(i) / rod.voronoi[i]),
-            curvature: ends_repeated(rod, &|i| rod.geo.kb[i].norm() / rod.voronoi[i]),
-            velocity: (0..rod.nodes())
-                .map(|i| rod.node_velocity(i).map(|v| v as f32).into())
+            twist_rate: per_node(&|rod, i| rod.twist(i) / rod.voronoi[i]),
+            curvature: per_node(&|rod, i| rod.geo.kb[i].norm() / rod.voronoi[i]),
+            velocity: (rods.iter())
+                .flat_map(|rod| (0..rod.nodes()).map(|i| rod.node_velocity(i).map(|v| v as f32).into()))
                 .collect(),
             contacts,
+            rods: match rods.len() {
+                1 => Vec::new(),
+                _ => rods.iter().map(Rod::nodes).collect(),
+            },
         }
     }
 }

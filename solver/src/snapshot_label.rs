@@ -32,6 +32,8 @@ pub enum SnapshotLabel {
     /// Along a stage, at regular spacing: the stage's key (`pull`, `release`,
     /// `hold`, `rotate`, `soft`).
     Stage(StageKind),
+    /// A bend set: its tails let go once the pull has seated it: `set`.
+    Set,
     /// Around an event: `{when}_{kind}` (`before_inversion`, `at_flip_back`, ...).
     Event(EventWhen, EventKind),
     /// The end of the program: `final`.
@@ -58,6 +60,7 @@ impl SnapshotLabel {
         [Self::Relaxed]
             .into_iter()
             .chain(stages)
+            .chain([Self::Set])
             .chain(events)
             .chain([Self::Final, Self::Failure, Self::Sample])
             .collect()
@@ -84,6 +87,7 @@ impl std::fmt::Display for SnapshotLabel {
         match self {
             Self::Relaxed => f.write_str("relaxed"),
             Self::Stage(kind) => write!(f, "{kind}"),
+            Self::Set => f.write_str("set"),
             Self::Event(when, kind) => write!(f, "{when}_{kind}"),
             Self::Final => f.write_str("final"),
             Self::Failure => f.write_str("failure"),
@@ -147,14 +151,19 @@ mod tests {
                 "after_flip_back",
                 SnapshotLabel::Event(EventWhen::After, FlipBack),
             ),
+            ("set", SnapshotLabel::Set),
+            (
+                "at_slip_through",
+                SnapshotLabel::Event(EventWhen::At, EventKind::SlipThrough),
+            ),
             ("final", SnapshotLabel::Final),
             ("failure", SnapshotLabel::Failure),
         ] {
             assert_eq!(SnapshotLabel::parse(word), Ok(label));
         }
         assert_eq!(
-            SnapshotLabel::parse("at_snap"),
-            Err(UnknownLabel("at_snap".to_string()))
+            SnapshotLabel::parse("at_knot"),
+            Err(UnknownLabel("at_knot".to_string()))
         );
         assert!(serde_json::from_str::<SnapshotLabel>("\"inversion\"").is_err());
     }

@@ -152,6 +152,7 @@ mod tests {
                 friction_force: [0.05, 0.0, 0.0],
                 stick: true,
             }],
+            rods: Vec::new(),
         }
     }
 

@@ -61,8 +61,35 @@ pub enum KnotKind {
     FigureEight,
     /// The closure of `braid_word`.
     Braid,
+    /// Two rods tied by the reef knot (square knot), pulled by their
+    /// standing ends ([`crate::knot::bends`]).
+    Reef,
+    /// The granny knot: the reef with one half knot mirrored.
+    Granny,
+    /// The thief knot: the reef pulled by the other end of one rod.
+    Thief,
+    /// The grief knot: the granny pulled by the other end of one rod.
+    Grief,
 }
 
+impl KnotKind {
+    /// The bend it ties, if it is one.
+    pub fn bend(self) -> Option<crate::knot::Bend> {
+        use crate::knot::Bend;
+        match self {
+            KnotKind::Reef => Some(Bend::Reef),
+            KnotKind::Granny => Some(Bend::Granny),
+            KnotKind::Thief => Some(Bend::Thief),
+            KnotKind::Grief => Some(Bend::Grief),
+            KnotKind::Overhand | KnotKind::FigureEight | KnotKind::Braid => None,
+        }
+    }
+}
+
+/// F bar at which a bend's pull stops, tight, when `max_force_bar` is not
+/// given (a bend has no inversion, and its free tails keep its own length
+/// from the stopping rule `min_l_k_bar`).
+pub const BEND_TIGHT_FORCE_BAR: f64 = 0.05;
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;
 /// h >= L / this: with edges of at most 4h ([`crate::knot::build`]) and at most
@@ -179,38 +206,63 @@ impl CaseParams {
         })
     }
 
-    /// l_k bar of a start shape (eq. 11).
+    /// l_k bar of a start shape (eq. 11; for a bend, the rods' rest lengths
+    /// less the pulled clamps' distance, over h).
     fn l_k_bar_of(&self, start: &StartShape) -> f64 {
-        let points = start.points();
-        let span = points[points.len() - 1] - points[0];
-        (self.length - span.norm()) / self.h
+        let [a, b] = start.clamp_points();
+        (self.rest_length() - (b - a).norm()) / self.h
     }
 
     /// Why the loading program cannot run from `start`, if it cannot.
     fn loading_error(&self, start: &StartShape) -> Option<FieldError> {
-        let points = start.points();
-        let span = points[points.len() - 1] - points[0];
+        let [a, b] = start.clamp_points();
+        let span = b - a;
         let along_x = span.y.abs().max(span.z.abs()) <= 1e-9 * span.norm();
         self.program_error(self.l_k_bar_of(start), along_x)
     }
 
     /// Why the loading program cannot run from a knot starting at l_k bar
-    /// `start` ([`loading::check`]), or with soft stages on a knot not
-    /// pulled along x (its springs act along x), if it cannot.
+    /// `start` ([`loading::check`]), with soft stages on a knot not pulled
+    /// along x (its springs act along x), or with soft or rotating stages on
+    /// a bend (its standing ends alone are clamped), if it cannot.
     fn program_error(&self, start: f64, along_x: bool) -> Option<FieldError> {
         let program = self.loading.as_deref()?;
         let soft = program.iter().any(|s| matches!(s, LoadStage::Soft(_)));
-        let reason = if soft && !along_x {
+        let turns = program.iter().any(|s| matches!(s, LoadStage::Rotate(_)));
+        let reason = if self.knot.bend().is_some() && (soft || turns) {
+            Err(format!(
+                "knot \"{}\" is a bend: its standing ends are pulled, held or released; soft and rotate stages \
+                 act on one rod's two clamps",
+                self.knot
+            ))
+        } else if soft && !along_x {
             Err("a soft stage needs the clamps on the x axis, as the builder's knots are: this initial_shape's \
                  ends are not"
                 .to_string())
         } else {
-            loading::check(program, start, self.length / self.h)
+            loading::check(program, start, self.rest_length() / self.h)
         };
         reason.err().map(|reason| FieldError {
             field: "loading".to_string(),
             reason,
         })
+    }
+
+    /// F bar above which a tightening stops, the knot tight:
+    /// `max_force_bar`, or [`BEND_TIGHT_FORCE_BAR`] for a bend.
+    pub fn tight_force_bar(&self) -> Option<f64> {
+        match (self.max_force_bar, self.knot.bend()) {
+            (None, Some(_)) => Some(BEND_TIGHT_FORCE_BAR),
+            (given, _) => given,
+        }
+    }
+
+    /// The rods' rest lengths summed: L, or 2L for a bend.
+    pub fn rest_length(&self) -> f64 {
+        match self.knot.bend() {
+            Some(_) => 2.0 * self.length,
+            None => self.length,
+        }
     }
 
     /// The loading program: `loading`, or one tightening.
@@ -490,12 +542,12 @@ mod tests {
             ..CaseParams::default()
         };
         assert_eq!(refusal(overhand_word).0, "braid_word");
-        let unknown: Result<CaseParams, _> = serde_json::from_str(r#"{"knot": "granny"}"#);
+        let unknown: Result<CaseParams, _> = serde_json::from_str(r#"{"knot": "granny_square"}"#);
         assert!(
             unknown
                 .unwrap_err()
                 .to_string()
-                .contains("unknown variant `granny`")
+                .contains("unknown variant `granny_square`")
         );
         let short = CaseParams {
             length: 0.3,

@@ -6,7 +6,7 @@ use super::{
     MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{
-    self, BraidSpec, BraidWord, Family, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
+    self, BendSpec, BraidSpec, BraidWord, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
     StartShape,
 };
 use serde::{Deserialize, Serialize};
@@ -138,14 +138,26 @@ pub const PARAMETERS: &[Parameter] = &[
         group: Group::Knot,
         unit: "",
         default: "\"overhand\"",
-        range: Range::Words(&["overhand", "figure_eight", "braid"]),
+        range: Range::Words(&[
+            "overhand",
+            "figure_eight",
+            "braid",
+            "reef",
+            "granny",
+            "thief",
+            "grief",
+        ]),
         null: None,
         paper: "\"overhand\"",
         doc: "The knot tied in the rod: \"overhand\" with n passes (the paper's), \"figure_eight\" (4_1) or \
               \"braid\", the closure of braid_word opened into a long knot. Each is tied loose and contact-free, \
               clamped at both ends and pulled apart; its Alexander polynomial is checked on the start shape and \
               at the end and reported (alexander_initial, alexander_final: coefficients, lowest power first), and \
-              the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot).",
+              the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends \
+              \"reef\", \"granny\", \"thief\" and \"grief\" tie two rods of length L together, pull their standing \
+              ends apart with the tails free until tight (max_force_bar, default 0.05) or until the rods slip \
+              apart, and report whether the rods still hold each other and the holding force (the largest F bar \
+              before they part), with l_k bar = (2L - the pulled clamps' distance) / h.",
         value: UNCHECKED,
     },
     Parameter {
@@ -608,8 +620,8 @@ impl CaseParams {
         let field = match &e {
             KnotError::Passes(_) | KnotError::Topology(_) | KnotError::WrongKnot { .. } => match self.knot {
                 KnotKind::Overhand => "n",
-                KnotKind::FigureEight => "knot",
                 KnotKind::Braid => "braid_word",
+                _ => "knot",
             },
             KnotError::Braid(_) => "braid_word",
             KnotError::RodTooShort { .. } => "length",
@@ -626,7 +638,10 @@ impl CaseParams {
             | KnotError::Infeasible { .. } => braid_or_h,
             KnotError::EndToEndOutOfRange { .. } => "end_to_end",
         };
-        let mut reason = format!("the knot with n = {} passes cannot be built: {e}", self.n);
+        let mut reason = match self.knot {
+            KnotKind::Overhand => format!("the knot with n = {} passes cannot be built: {e}", self.n),
+            kind => format!("knot \"{kind}\" cannot be built: {e}"),
+        };
         if let KnotError::TooFewNodes { min, .. } = e
             && min > MAX_NODES
         {
@@ -646,17 +661,22 @@ impl CaseParams {
     /// start); a failure names the parameter to change.
     pub(super) fn start_shape(&self) -> Result<StartShape, FieldError> {
         let knot = self.knot()?;
-        match &self.initial_shape {
-            Some(points) => {
+        match (&self.initial_shape, knot.alexander()) {
+            (Some(points), Some(alexander)) => {
                 let rod = (self.length, self.node_count(), self.h);
-                knot::checked_start(points, rod, &knot.name(), &knot.alexander()).map_err(|reason| {
-                    FieldError {
-                        field: "initial_shape".to_string(),
-                        reason,
-                    }
+                knot::checked_start(points, rod, &knot.name(), &alexander).map_err(|reason| FieldError {
+                    field: "initial_shape".to_string(),
+                    reason,
                 })
             }
-            None => knot.tie().map_err(|e| self.knot_error(e)),
+            (Some(_), None) => Err(FieldError {
+                field: "initial_shape".to_string(),
+                reason: format!(
+                    "initial_shape gives one rod; {} ties two, built by the solver: leave it out",
+                    knot.name()
+                ),
+            }),
+            (None, _) => knot.tie().map_err(|e| self.knot_error(e)),
         }
     }
 
@@ -692,6 +712,12 @@ impl CaseParams {
                 ));
             }
         }
+        if kind.bend().is_some() && self.start_twist.is_some() {
+            return Err(refuse(
+                "start_twist",
+                format!("knot \"{kind}\" is a bend: its tails are free, so no twist is held between clamps"),
+            ));
+        }
         let word = match (kind, &self.braid_word) {
             (KnotKind::Braid, None) => {
                 return Err(refuse(
@@ -720,6 +746,12 @@ impl CaseParams {
             }),
             (KnotKind::Braid, word) => Knot::Braid(BraidSpec {
                 word: word.expect("read above"),
+                length,
+                nodes,
+                radius,
+            }),
+            (kind, _) => Knot::Bend(BendSpec {
+                bend: kind.bend().expect("every other knot is a bend"),
                 length,
                 nodes,
                 radius,

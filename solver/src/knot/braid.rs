@@ -277,11 +277,8 @@ pub(super) fn tie(spec: &BraidSpec, expected: Alexander) -> Result<StartShape, K
         equal_chords(&dense.points, &dense.arc, edge, spec.nodes).expect("the extension outlasts the chords");
     check_clearance(&points, h, edge)?;
     check_knot(&points, &expected)?;
-    Ok(StartShape {
-        loop_middle: points.len() / 2,
-        rods: vec![points],
-        alexander: expected,
-    })
+    let middle = points.len() / 2;
+    Ok(StartShape::one_rod(points, middle, expected))
 }
 
 /// The knot's dense curve from the braid's left end on position 0 to its

@@ -4,15 +4,20 @@
 //!
 //! - [`overhand`]: the overhand knot with `n` passes (paper Sec. 2 and 4);
 //! - [`figure_eight`]: the figure-eight knot `4_1`;
-//! - [`braid`]: the closure of any braid word on at most 5 strands.
+//! - [`braid`]: the closure of any braid word on at most 5 strands;
+//! - [`bends`]: two rods tied together, the reef, granny, thief and grief
+//!   knots.
 //!
-//! A family's knot is a [`StartShape`]: its rods' centre lines with the
-//! clamped ends (one rod, clamped and pulled at both ends, for every family
-//! so far) and its Alexander polynomial ([`alexander`]), which the builder
-//! checks on the shape it ties and the run on the shape at the end.
+//! A family's knot is a [`StartShape`]: its rods' centre lines with the two
+//! pulled clamps (a one-rod knot's two ends; a bend's two standing ends, its
+//! tails free) and, for a knot in one rod, its Alexander polynomial
+//! ([`alexander`]), which the builder checks on the shape it ties and the
+//! run on the shape at the end; a bend has none (its rods are open and
+//! separate): the run reports whether its rods still hold each other.
 //! [`topology`] gives the cheaper knot determinant `|Delta(-1)|` checked at
 //! every sample; [`twist`] the writhe and the start twist.
 mod alexander;
+pub mod bends;
 pub mod braid;
 pub mod figure_eight;
 pub mod overhand;
@@ -22,12 +27,14 @@ pub mod topology;
 mod twist;
 
 pub use alexander::{Alexander, alexander, alexander_along, closed_alexander};
+pub use bends::{Bend, BendSpec};
 pub use braid::{BraidError, BraidSpec, BraidWord};
 pub use figure_eight::FigureEightSpec;
 pub use overhand::{
     BRAID_MARGIN, KNOT_RADII, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
     MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
+pub use polyline::closest_approach;
 pub use start::checked_start;
 pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
@@ -59,14 +66,17 @@ pub enum Knot {
     Overhand(KnotSpec),
     FigureEight(FigureEightSpec),
     Braid(BraidSpec),
+    Bend(BendSpec),
 }
 
 impl Knot {
-    fn family(&self) -> &dyn Family {
+    /// The family of a knot in one rod (`None`: a bend).
+    fn family(&self) -> Option<&dyn Family> {
         match self {
-            Knot::Overhand(spec) => spec,
-            Knot::FigureEight(spec) => spec,
-            Knot::Braid(spec) => spec,
+            Knot::Overhand(spec) => Some(spec),
+            Knot::FigureEight(spec) => Some(spec),
+            Knot::Braid(spec) => Some(spec),
+            Knot::Bend(_) => None,
         }
     }
 
@@ -76,47 +86,96 @@ impl Knot {
             Knot::Overhand(spec) => format!("the overhand knot with n = {} passes", spec.n),
             Knot::FigureEight(_) => "the figure-eight knot".to_string(),
             Knot::Braid(spec) => format!("the closure of the braid {}", spec.word),
+            Knot::Bend(spec) => spec.bend.name().to_string(),
         }
+    }
+
+    /// The Alexander polynomial of a knot in one rod ([`Family::alexander`]);
+    /// `None` for a bend.
+    pub fn alexander(&self) -> Option<Alexander> {
+        self.family().map(Family::alexander)
+    }
+
+    /// Its loose, contact-free start shape ([`Family::tie`], [`BendSpec::tie`]).
+    pub fn tie(&self) -> Result<StartShape, KnotError> {
+        match (self, self.family()) {
+            (Knot::Bend(spec), _) => spec.tie(),
+            (_, Some(family)) => family.tie(),
+            (_, None) => unreachable!("every knot in one rod has a family"),
+        }
+    }
+
+    /// The twist it starts with when the case gives none ([`Family::twist`];
+    /// none for a bend, whose tails are free).
+    pub fn twist(&self, writhe: f64) -> f64 {
+        self.family().map_or(0.0, |f| f.twist(writhe))
     }
 }
 
-impl Family for Knot {
-    fn alexander(&self) -> Alexander {
-        self.family().alexander()
-    }
-
-    fn tie(&self) -> Result<StartShape, KnotError> {
-        self.family().tie()
-    }
-
-    fn twist(&self, writhe: f64) -> f64 {
-        self.family().twist(writhe)
-    }
+/// One of the two pulled clamps: an end of a rod.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Clamp {
+    pub rod: usize,
+    pub end: End,
 }
 
 /// The shape a case starts from: a family's knot, or a user's points
 /// checked like one.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StartShape {
-    /// Centre line of each rod (one so far).
+    /// Centre line of each rod.
     pub rods: Vec<Vec<Vector3<f64>>>,
     /// A node of rod 0 in the middle of the knot's loop (where the braid
     /// search starts).
     pub loop_middle: usize,
-    /// The knot's Alexander polynomial, which it must keep.
-    pub alexander: Alexander,
+    /// The Alexander polynomial a knot in one rod must keep; `None` for a
+    /// bend.
+    pub alexander: Option<Alexander>,
+    /// The clamps pulled apart along the line joining them, the first
+    /// towards its side, the second towards its: a one-rod knot's start and
+    /// finish, a bend's standing ends. Every other end is free.
+    pub clamps: [Clamp; 2],
 }
 
 impl StartShape {
-    /// The one rod's centre line.
+    /// Rod 0's centre line.
     pub fn points(&self) -> &[Vector3<f64>] {
         &self.rods[0]
     }
 
-    /// The clamped ends, each pulled away from the other along the line
-    /// joining them: both ends of each rod.
-    pub fn clamps(&self) -> impl Iterator<Item = (usize, End)> + '_ {
-        (0..self.rods.len()).flat_map(|rod| [(rod, End::Start), (rod, End::Finish)])
+    /// One rod clamped at both ends.
+    pub fn one_rod(points: Vec<Vector3<f64>>, loop_middle: usize, alexander: Alexander) -> Self {
+        Self {
+            rods: vec![points],
+            loop_middle,
+            alexander: Some(alexander),
+            clamps: [
+                Clamp {
+                    rod: 0,
+                    end: End::Start,
+                },
+                Clamp {
+                    rod: 0,
+                    end: End::Finish,
+                },
+            ],
+        }
+    }
+
+    /// Whether it is a bend (several rods).
+    pub fn is_bend(&self) -> bool {
+        self.rods.len() > 1
+    }
+
+    /// The two pulled clamps' positions (the end nodes).
+    pub fn clamp_points(&self) -> [Vector3<f64>; 2] {
+        self.clamps.map(|c| {
+            let rod = &self.rods[c.rod];
+            match c.end {
+                End::Start => rod[0],
+                End::Finish => rod[rod.len() - 1],
+            }
+        })
     }
 }
 

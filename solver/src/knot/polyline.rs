@@ -35,17 +35,47 @@ pub(super) fn equal_chords(
 
 /// Fails if two non-neighbouring segments are closer than `2h`.
 pub(super) fn check_clearance(points: &[Vector3<f64>], h: f64, edge: f64) -> Result<(), KnotError> {
-    let segments = polyline_segments(points, h, 0);
-    let mut broad = BroadPhase::new();
-    let gap = neighbour_gap(2.0 * h, edge);
-    let pairs = broad.find_pairs(&segments, &[gap], 0.0).expect("valid segments");
-    match pairs.iter().map(|p| p.closest.distance).min_by(f64::total_cmp) {
+    check_clearance_rods(std::slice::from_ref(&points.to_vec()), h, edge)
+}
+
+/// Fails if two segments of different rods, or two non-neighbouring
+/// segments of one rod, are closer than `2h`.
+pub(super) fn check_clearance_rods(rods: &[Vec<Vector3<f64>>], h: f64, edge: f64) -> Result<(), KnotError> {
+    match closest_approach(rods, h, edge, 0.0, false) {
         Some(distance) => Err(KnotError::Clearance {
             distance,
             required: 2.0 * h,
         }),
         None => Ok(()),
     }
+}
+
+/// The smallest centre-line distance below `2h + margin` between segments
+/// of different rods, and (unless `between_rods`) non-neighbouring segments
+/// of one rod, of rods of radius `h` and edges `edge`; `None` if every such
+/// pair is farther apart.
+pub fn closest_approach(
+    rods: &[Vec<Vector3<f64>>],
+    h: f64,
+    edge: f64,
+    margin: f64,
+    between_rods: bool,
+) -> Option<f64> {
+    let segments: Vec<_> = rods
+        .iter()
+        .enumerate()
+        .flat_map(|(body, points)| polyline_segments(points, h, body))
+        .collect();
+    let mut broad = BroadPhase::new();
+    let gaps = vec![neighbour_gap(2.0 * h, edge); rods.len()];
+    let pairs = broad
+        .find_pairs(&segments, &gaps, margin)
+        .expect("valid segments");
+    pairs
+        .iter()
+        .filter(|p| !between_rods || segments[p.i].body != segments[p.j].body)
+        .map(|p| p.closest.distance)
+        .min_by(f64::total_cmp)
 }
 
 /// A dense polyline and its cumulative arc length.

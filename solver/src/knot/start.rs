@@ -40,11 +40,10 @@ pub fn checked_start(
     check_between_ends(&points)?;
     check_clearance(&points, &edges, radius)?;
     match alexander(&points) {
-        Ok(got) if got == *expected => Ok(StartShape {
-            loop_middle: points.len() / 2,
-            rods: vec![points],
-            alexander: got,
-        }),
+        Ok(got) if got == *expected => {
+            let middle = points.len() / 2;
+            Ok(StartShape::one_rod(points, middle, got))
+        }
         Ok(got) => Err(format!("Alexander polynomial {got}, but {name} has {expected}")),
         Err(e) => Err(format!("knot type undetermined: {e}")),
     }

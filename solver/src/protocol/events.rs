@@ -2,7 +2,7 @@
 //! ([`measurements::detect_inversion`], paper Fig. 5), the loop flipping back
 //! while it loosens ([`measurements::detect_flip_back`]).
 use super::adaptive::Way;
-use super::report::{Event, EventKind};
+use super::report::{BendSample, Event, EventKind};
 use crate::case::Direction;
 use crate::measurements::{self, InversionCriteria, Sample};
 
@@ -33,7 +33,7 @@ pub(super) fn detect(
     at.sample += first;
     let clean = match kind {
         EventKind::Inversion => at.f_bar_after < at.f_bar_before,
-        EventKind::FlipBack => at.kinetic_energy_ratio >= criteria.kinetic_energy_spike,
+        _ => at.kinetic_energy_ratio >= criteria.kinetic_energy_spike,
     };
     Some(Event {
         stage,
@@ -41,6 +41,82 @@ pub(super) fn detect(
         kind,
         at,
         clean,
+        restarts: 0,
+    })
+}
+
+/// The first snap of a bend's stage whose samples start at `first` in
+/// `series` (a tightening): [`measurements::detect_inversion`] read on F bar
+/// in place of H bar, so that F bar must fall to `drop_fraction` of its
+/// largest value within `window` before and the kinetic energy must burst
+/// (`kinetic_energy_spike`); its sample index is the series'.
+pub(super) fn detect_bend_snap(
+    series: &[Sample],
+    first: usize,
+    criteria: &InversionCriteria,
+    stage: usize,
+) -> Option<Event> {
+    let own = &series[first..];
+    let as_height: Vec<Sample> = own
+        .iter()
+        .map(|s| Sample {
+            width: 1.0,
+            h_bar: s.f_bar,
+            f_bar: 0.0,
+            ..*s
+        })
+        .collect();
+    let mut at = measurements::detect_inversion(&as_height, criteria)?;
+    let hi = (at.sample + 5).min(own.len());
+    at.f_bar_before = own[at.sample].f_bar;
+    at.f_bar_after = own[at.sample + 1..hi]
+        .iter()
+        .map(|s| s.f_bar)
+        .fold(f64::INFINITY, f64::min);
+    (at.h_bar_before, at.h_bar_after) = (0.0, 0.0);
+    at.sample += first;
+    Some(Event {
+        stage,
+        direction: Direction::Tighten,
+        kind: EventKind::Snap,
+        at,
+        clean: true,
+        restarts: 0,
+    })
+}
+
+/// A bend's slip-through in the stage whose samples start at `first` in
+/// `series` (`bend` the bend's own samples), the rods having parted at its
+/// last sample: the sample of the largest F bar before with the tails free,
+/// where the bend held most (its holding force).
+pub(super) fn slip_through(
+    series: &[Sample],
+    bend: &[BendSample],
+    first: usize,
+    stage: usize,
+) -> Option<Event> {
+    let own = &series[first..];
+    let (i, held) = (own.iter().zip(&bend[first..]).enumerate())
+        .filter(|(_, (_, b))| b.tails_free)
+        .map(|(i, (s, _))| (i, s))
+        .max_by(|a, b| a.1.f_bar.total_cmp(&b.1.f_bar))?;
+    let last = own[own.len() - 1];
+    Some(Event {
+        stage,
+        direction: Direction::Tighten,
+        kind: EventKind::SlipThrough,
+        at: measurements::Inversion {
+            l_k_bar: held.l_k_bar,
+            l_k_arc_bar: held.l_k_arc_bar,
+            l_c_over_l: held.l_c_over_l,
+            f_bar_before: held.f_bar,
+            f_bar_after: last.f_bar,
+            h_bar_before: 0.0,
+            h_bar_after: 0.0,
+            kinetic_energy_ratio: 0.0,
+            sample: first + i,
+        },
+        clean: true,
         restarts: 0,
     })
 }

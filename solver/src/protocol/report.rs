@@ -73,11 +73,16 @@ pub enum EventKind {
     /// The loop flips back while the knot loosens (the simplified model's
     /// second fold, Sec. 5).
     FlipBack,
+    /// A bend's snap: F bar drops suddenly with a burst of kinetic energy.
+    Snap,
+    /// A bend slips through: its rods part. `F_bar_before` is the holding
+    /// force, the largest F bar of the stage before they parted, at `l_k_bar`.
+    SlipThrough,
 }
 
 impl EventKind {
     /// Every kind of event.
-    pub const ALL: [Self; 2] = [Self::Inversion, Self::FlipBack];
+    pub const ALL: [Self; 4] = [Self::Inversion, Self::FlipBack, Self::Snap, Self::SlipThrough];
 }
 
 /// A snap of the loop, in the stage that saw it.
@@ -162,6 +167,37 @@ pub struct CaseReport {
     /// revision 8, and where no sample was taken at `pull_speed`).
     #[serde(default)]
     pub quasi_static: Option<QuasiStatic>,
+    /// A bend: whether its rods still hold each other at the end (a slip is
+    /// an outcome, not a failure); absent for a knot in one rod.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tied: Option<bool>,
+    /// A bend: the holding force, the largest F bar with the tails free
+    /// before the rods parted (its slip-through event's), or, where they
+    /// held to the end, the largest F bar they held (a lower bound); absent
+    /// for a knot in one rod.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub holding_force_bar: Option<f64>,
+    /// A bend's own measurements at each sample of `series`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bend_series: Vec<BendSample>,
+}
+
+/// A bend's own measurements at a sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BendSample {
+    /// F bar at each pulled clamp (rod 0's standing end, rod 1's), each
+    /// along its own side of the pull, averaged over the sample's interval.
+    #[serde(rename = "F_bar")]
+    pub f_bar: [f64; 2],
+    /// Each rod's elastic energy over EI / h (eq. 6 by node, `energies::within`).
+    #[serde(rename = "E_bar")]
+    pub energy_bar: [f64; 2],
+    /// The rods have come apart: they neither touch (no two segments within
+    /// half a radius of each other's surface) nor bend (each rod's elastic
+    /// energy below 0.02 EI / h).
+    pub apart: bool,
+    /// The tails are free (the bend has set).
+    pub tails_free: bool,
 }
 
 impl CaseReport {
@@ -186,7 +222,25 @@ impl CaseReport {
             phases: Vec::new(),
             scaling: None,
             quasi_static: None,
+            tied: None,
+            holding_force_bar: None,
+            bend_series: Vec::new(),
         }
+    }
+
+    /// A bend's outcome: still tied unless it slipped through, and its
+    /// holding force (the slip's, or the largest F bar of its series with
+    /// the tails free).
+    pub(super) fn close_bend(&mut self) {
+        let slip = self.events.iter().find(|e| e.kind == EventKind::SlipThrough);
+        self.tied = Some(slip.is_none() && self.bend_series.last().is_none_or(|b| !b.apart));
+        self.holding_force_bar = match slip {
+            Some(e) => Some(e.at.f_bar_before),
+            None => (self.series.iter().zip(&self.bend_series))
+                .filter(|(_, b)| b.tails_free)
+                .map(|(s, _)| s.f_bar)
+                .max_by(f64::total_cmp),
+        };
     }
 
     /// The first inversion of a tightening stage, and the first flip back

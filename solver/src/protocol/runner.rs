@@ -2,14 +2,13 @@
 //! program walked stage by stage; the steps, samples and checks every stage
 //! shares; the report at the end.
 use super::adaptive::{Outcome, Phase, RELAX_DAMPING};
-use super::report::{CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
+use super::report::{BendSample, CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::GaussSeidelOptions;
 use crate::energies;
 use crate::external::{Environment, sliding};
-use crate::knot::StartShape;
-use crate::knot::{self, Alexander, Family};
+use crate::knot::{self, Alexander, Clamp, StartShape};
 use crate::material::Material;
 use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World, WorldStepReport};
@@ -21,6 +20,19 @@ use nalgebra::Vector3;
 use std::collections::VecDeque;
 use std::time::Instant;
 
+/// F bar to which a bend's first pull tightens it with its tails held, to
+/// set it, before freeing them: half the default tight force, so that a
+/// bend that holds takes twice its setting load with its tails free.
+pub const BEND_SET_FORCE_BAR: f64 = 0.5 * crate::case::BEND_TIGHT_FORCE_BAR;
+/// A bend's rods have come apart when no two of their segments are closer
+/// than 2h plus this many radii...
+pub(super) const PARTED: f64 = 0.5;
+/// ...and neither rod's elastic energy is above this many EI / h: that of a
+/// bend of radius 80 h through a half turn (pi h / 2R), an eighth of the
+/// loose start's bights'. A slipped bend's rods lie straight side by side
+/// along the pull, within reach of each other; a tied one's bights hold
+/// their bends.
+pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
 /// Penetration (fraction of h) that ends a case as `Penetrated`.
 const MAX_PENETRATION: f64 = 0.5;
 /// What to change when a case fails in a step: the numerical options that
@@ -70,20 +82,23 @@ impl Ending {
 }
 
 /// The knot: the case's start shape (built or the user's) with its knot
-/// type checked, and the world holding it as a clamped DER rod with the
-/// case's contact, friction and time-stepping options, its inertia scaled and
-/// its weight physical ([`CaseParams::scales`]).
+/// type checked (a knot in one rod), and the world holding its rods as DER
+/// rods clamped at the pulled ends with the case's contact, friction and
+/// time-stepping options, their inertia scaled and their weight physical
+/// ([`CaseParams::scales`]).
 fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
     let (params, shape) = (case.params(), case.start());
     let points = shape.points();
-    report.determinant_initial = knot::knot_determinant(points).ok();
-    report.alexander_initial = knot::alexander(points).ok();
-    if report.alexander_initial.as_ref() != Some(&shape.alexander) {
-        return Err(format!(
-            "the start shape has Alexander polynomial {}, expected {}",
-            alexander_text(report.alexander_initial.as_ref()),
-            shape.alexander
-        ));
+    if let Some(expected) = &shape.alexander {
+        report.determinant_initial = knot::knot_determinant(points).ok();
+        report.alexander_initial = knot::alexander(points).ok();
+        if report.alexander_initial.as_ref() != Some(expected) {
+            return Err(format!(
+                "the start shape has Alexander polynomial {}, expected {}",
+                alexander_text(report.alexander_initial.as_ref()),
+                expected
+            ));
+        }
     }
     let scales = params.scales();
     let material = Material {
@@ -91,13 +106,25 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         poisson_ratio: params.poisson_ratio,
         density: params.density * scales.mass_scale,
     };
-    let mut rod = Rod::new(points, params.h, material).map_err(|e| format!("rod: {e}"))?;
-    report.writhe = knot::writhe(points);
+    let mut rods = shape
+        .rods
+        .iter()
+        .map(|points| Rod::new(points, params.h, material).map_err(|e| format!("rod: {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
     let family = params.knot().map_err(|e| e.to_string())?;
-    report.start_twist = params.start_twist.unwrap_or_else(|| family.twist(report.writhe));
-    rod.add_twist(report.start_twist);
-    for (_, end) in shape.clamps() {
-        rod.clamp(end);
+    if !shape.is_bend() {
+        report.writhe = knot::writhe(points);
+        report.start_twist = params.start_twist.unwrap_or_else(|| family.twist(report.writhe));
+        rods[0].add_twist(report.start_twist);
+    }
+    for clamp in shape.clamps {
+        rods[clamp.rod].clamp(clamp.end);
+    }
+    if shape.is_bend() {
+        // The tails are held while the bend relaxes and sets (`release_tails`).
+        for clamp in tails(&shape.clamps) {
+            rods[clamp.rod].clamp(clamp.end);
+        }
     }
     let newton = NewtonOptions {
         force_scale: Some(force_unit(params)),
@@ -121,7 +148,7 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         gravity: Vector3::from(params.gravity) / scales.mass_scale,
         damping: RELAX_DAMPING / scales.time_unit,
     };
-    Ok(World::new(vec![rod], env, contact, newton))
+    Ok(World::new(rods, env, contact, newton))
 }
 
 /// The force unit of F bar: EI / h^2 (eq. 11).
@@ -130,16 +157,55 @@ pub(super) fn force_unit(params: &CaseParams) -> f64 {
 }
 
 /// The pulling force (N) on the knot along `axis` after the last step: the
-/// mean of the two clamps' reactions along the pull, or of the springs'
-/// tensions when the clamps sit on springs (a soft stage).
-fn pulling_force(world: &World, axis: &Vector3<f64>) -> f64 {
-    let (rod, stepper) = (&world.rods[0], world.stepper(0));
+/// mean of the two pulled clamps' reactions along the pull, or of the
+/// springs' tensions when the clamps sit on springs (a soft stage).
+fn pulling_force(world: &World, clamps: &[Clamp; 2], axis: &Vector3<f64>) -> f64 {
+    let rod = &world.rods[clamps[0].rod];
     if let [start, finish] = rod.springs[..] {
         return 0.5 * (finish.force(&rod.q, finish.anchor) - start.force(&rod.q, start.anchor));
     }
-    let start = -stepper.clamp_reaction(rod, End::Start).0.dot(axis);
-    let finish = stepper.clamp_reaction(rod, End::Finish).0.dot(axis);
+    let [start, finish] = clamp_forces(world, clamps, axis);
     0.5 * (start + finish)
+}
+
+/// Each pulled clamp's pull (N) along its own side of `axis` after the last
+/// step: the first clamp's towards `-axis`, the second's towards `axis`.
+pub(super) fn clamp_forces(world: &World, clamps: &[Clamp; 2], axis: &Vector3<f64>) -> [f64; 2] {
+    let reaction = |c: &Clamp| {
+        world
+            .stepper(c.rod)
+            .clamp_reaction(&world.rods[c.rod], c.end)
+            .0
+            .dot(axis)
+    };
+    [-reaction(&clamps[0]), reaction(&clamps[1])]
+}
+
+/// A bend's tails: the ends of its rods other than the pulled ones.
+fn tails(clamps: &[Clamp; 2]) -> [Clamp; 2] {
+    clamps.map(|c| Clamp {
+        rod: c.rod,
+        end: match c.end {
+            End::Start => End::Finish,
+            End::Finish => End::Start,
+        },
+    })
+}
+
+/// The position of clamp `c`'s end node.
+pub(super) fn clamp_point(world: &World, c: &Clamp) -> Vector3<f64> {
+    let rod = &world.rods[c.rod];
+    match c.end {
+        End::Start => rod.node(0),
+        End::Finish => rod.node(rod.nodes() - 1),
+    }
+}
+
+/// eq. 11's l_k bar of `world` (a bend's: the rods' rest lengths less the
+/// pulled clamps' distance, over h).
+fn l_k_bar_of(world: &World, clamps: &[Clamp; 2], params: &CaseParams) -> f64 {
+    let [a, b] = clamps.map(|c| clamp_point(world, &c));
+    (params.rest_length() - (b - a).norm()) / params.h
 }
 
 /// A knot determinant as users read it.
@@ -162,6 +228,10 @@ pub(super) struct Carried {
     /// The pulling force integrated over time since the last sample, and that time.
     pub(super) impulse: f64,
     pub(super) impulse_time: f64,
+    /// Each pulled clamp's force integrated over the same time (a bend's).
+    pub(super) clamp_impulses: [f64; 2],
+    /// A bend's tails are still held (until it has set, `release_tails`).
+    pub(super) tails_held: bool,
     /// The loop's middle node, from the builder and then tracked from each
     /// sample's braid ends.
     pub(super) mid: usize,
@@ -179,10 +249,12 @@ pub(super) struct Case<'a> {
     pub(super) carried: Carried,
     /// The phase each sample was taken in.
     pub(super) sample_phases: Vec<Phase>,
-    /// The knot's Alexander polynomial, and its determinant |Delta(-1)|
-    /// checked at every sample.
-    alexander: Alexander,
+    /// The Alexander polynomial of a knot in one rod, and its determinant
+    /// |Delta(-1)| checked at every sample (`None`: a bend).
+    alexander: Option<Alexander>,
     expected: u64,
+    /// The two pulled clamps.
+    pub(super) clamps: [Clamp; 2],
     /// The case's inertia and time unit.
     pub(super) scales: Scales,
     /// Unit vector from the start clamp to the finish clamp.
@@ -210,12 +282,15 @@ impl<'a> Case<'a> {
             AdaptiveOptions::fixed(dt)
         });
         let rod = &world.rods[0];
-        let axis = (rod.node(rod.nodes() - 1) - rod.node(0)).normalize();
+        let [a, b] = start.clamps.map(|c| clamp_point(&world, &c));
+        let axis = (b - a).normalize();
         let carried = Carried {
             time: 0.0,
             peak_kinetic_energy: 0.0,
             impulse: 0.0,
             impulse_time: 0.0,
+            clamp_impulses: [0.0; 2],
+            tails_held: start.is_bend(),
             mid: start.loop_middle,
             twist: Tracker::new(rod, report.writhe),
             history: VecDeque::with_capacity(SNAPSHOT_HISTORY),
@@ -228,7 +303,8 @@ impl<'a> Case<'a> {
             carried,
             sample_phases: Vec::new(),
             alexander: start.alexander.clone(),
-            expected: start.alexander.determinant(),
+            expected: start.alexander.as_ref().map_or(0, Alexander::determinant),
+            clamps: start.clamps,
             scales: params.scales(),
             axis,
             program: params.program(),
@@ -239,14 +315,58 @@ impl<'a> Case<'a> {
     }
 
     pub(super) fn l_k_bar(&self) -> f64 {
-        let r = &self.world.rods[0];
-        (self.params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / self.params.h
+        l_k_bar_of(&self.world, &self.clamps, self.params)
     }
 
     /// The knot's own length, which the stopping rules and the adaptive
-    /// schedule's windows act on (`measurements::l_k_arc_bar`).
+    /// schedule's windows act on (`measurements::l_k_arc_bar`; a bend's:
+    /// the rods' arc lengths less the pulled clamps' distance, over h).
     pub(super) fn l_k_arc_bar(&self) -> f64 {
-        measurements::l_k_arc_bar(&self.world.rods[0].positions(), self.params.h)
+        if !self.is_bend() {
+            return measurements::l_k_arc_bar(&self.world.rods[0].positions(), self.params.h);
+        }
+        let arc: f64 = (self.world.rods.iter())
+            .flat_map(|r| (1..r.nodes()).map(|i| (r.node(i) - r.node(i - 1)).norm()))
+            .sum();
+        let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
+        (arc - (b - a).norm()) / self.params.h
+    }
+
+    /// Frees a bend's tails once it has set: held while it relaxed and while
+    /// its first pull tightened it to F bar [`BEND_SET_FORCE_BAR`] (a loose
+    /// bend of elastic rods springs open when its tails are free; a knot
+    /// tied by hand is set by pulling its four ends before its standing ends
+    /// are loaded).
+    pub(super) fn release_tails(&mut self, f_bar: f64) {
+        if !self.carried.tails_held || f_bar < BEND_SET_FORCE_BAR {
+            return;
+        }
+        self.carried.tails_held = false;
+        for tail in tails(&self.clamps) {
+            let rod = &mut self.world.rods[tail.rod];
+            for d in rod.clamp_dofs(tail.end) {
+                rod.fixed[d] = false;
+                rod.prescribed_velocity[d] = 0.0;
+            }
+        }
+        self.world.forget_factorizations();
+        let at = self.l_k_bar();
+        self.report.snapshots.push(Snapshot::capture(
+            &self.world,
+            SnapshotLabel::Set,
+            at,
+            self.clock.elapsed,
+        ));
+    }
+
+    /// Whether the case pulls a bend (two rods).
+    pub(super) fn is_bend(&self) -> bool {
+        self.alexander.is_none()
+    }
+
+    /// The rods' kinetic energies summed (J).
+    fn kinetic_energy(&self) -> f64 {
+        self.world.rods.iter().map(Rod::kinetic_energy).sum()
     }
 
     /// An `Ending` when the last step penetrated beyond `MAX_PENETRATION` h
@@ -276,6 +396,9 @@ impl<'a> Case<'a> {
         points: &[Vector3<f64>],
         when: impl FnOnce() -> String,
     ) -> Result<(), Ending> {
+        if self.is_bend() {
+            return Ok(());
+        }
         let det = knot::knot_determinant(points).ok();
         self.determinant(det, when)
     }
@@ -336,7 +459,7 @@ impl<'a> Case<'a> {
             self.carried.twist.step(&self.world.rods[0]);
             self.count_step(&step.report);
             self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
-            let ke = self.world.rods[0].kinetic_energy();
+            let ke = self.kinetic_energy();
             if ke <= self.params.relax_tolerance * step.report.energies.total() {
                 break;
             }
@@ -356,22 +479,24 @@ impl<'a> Case<'a> {
                 stage => self.travel(stage, observer)?,
             }
         }
-        let points = self.world.rods[0].positions();
-        let det = knot::knot_determinant(&points).ok();
-        self.report.determinant_final = det;
-        self.determinant(det, || "at the end".to_string())?;
-        let alexander = knot::alexander(&points).ok();
-        self.report.alexander_final = alexander.clone();
-        if alexander.as_ref() != Some(&self.alexander) {
-            return Err(Ending::new(
-                Status::TopologyChanged,
-                format!(
-                    "Alexander polynomial {} at the end, expected {}: strands passed through each other; \
-                     {STEP_HINT}",
-                    alexander_text(alexander.as_ref()),
-                    self.alexander
-                ),
-            ));
+        if let Some(expected) = self.alexander.clone() {
+            let points = self.world.rods[0].positions();
+            let det = knot::knot_determinant(&points).ok();
+            self.report.determinant_final = det;
+            self.determinant(det, || "at the end".to_string())?;
+            let alexander = knot::alexander(&points).ok();
+            self.report.alexander_final = alexander.clone();
+            if alexander.as_ref() != Some(&expected) {
+                return Err(Ending::new(
+                    Status::TopologyChanged,
+                    format!(
+                        "Alexander polynomial {} at the end, expected {}: strands passed through each other; \
+                         {STEP_HINT}",
+                        alexander_text(alexander.as_ref()),
+                        expected
+                    ),
+                ));
+            }
         }
         let at = self.l_k_bar();
         self.report.snapshots.push(Snapshot::capture(
@@ -389,19 +514,28 @@ impl<'a> Case<'a> {
     pub(super) fn step(&mut self, phase: Phase) -> Result<(WorldStepReport, f64), Ending> {
         if phase.spares_sliding() {
             let gamma = self.world.env.damping;
-            self.world
-                .set_load(0, |rod, load| sliding::exempt_sliding(rod, gamma, load));
+            for rod in 0..self.world.rods.len() {
+                self.world
+                    .set_load(rod, |rod, load| sliding::exempt_sliding(rod, gamma, load));
+            }
         }
         let (step, dt) = match self.clock.advance(&mut self.world) {
             Ok(s) => (s.report, s.dt),
             Err(e) => return Err(Ending::new(Status::Diverged, format!("{e}; {STEP_HINT}"))),
         };
+        let kinetic_energy = self.kinetic_energy();
         let c = &mut self.carried;
         c.time += dt;
         c.twist.step(&self.world.rods[0]);
-        c.peak_kinetic_energy = c.peak_kinetic_energy.max(self.world.rods[0].kinetic_energy());
-        c.impulse += dt * pulling_force(&self.world, &self.axis);
+        c.peak_kinetic_energy = c.peak_kinetic_energy.max(kinetic_energy);
+        c.impulse += dt * pulling_force(&self.world, &self.clamps, &self.axis);
         c.impulse_time += dt;
+        if self.alexander.is_none() {
+            let forces = clamp_forces(&self.world, &self.clamps, &self.axis);
+            for (i, f) in c.clamp_impulses.iter_mut().zip(forces) {
+                *i += dt * f;
+            }
+        }
         let stats = &mut self.report.stats;
         stats.steps += 1;
         stats.newton_iterations += u64::from(step.newton_iterations);
@@ -421,7 +555,9 @@ impl<'a> Case<'a> {
         self.world.contact.solver.tolerance = phase.contact_tolerance(self.params.contact_tolerance);
         self.world.env.damping = phase.damping(self.params.damping, RELAX_DAMPING / self.scales.time_unit);
         if !phase.spares_sliding() {
-            self.world.set_load(0, |_, load| load.fill(0.0));
+            for rod in 0..self.world.rods.len() {
+                self.world.set_load(rod, |_, load| load.fill(0.0));
+            }
         }
         if self.params.adaptive_dt {
             self.clock.rescale(phase.dt_max(self.params.time_step()));
@@ -462,19 +598,28 @@ impl<'a> Case<'a> {
         l_k_bar: f64,
     ) -> Vec<Vector3<f64>> {
         let params = self.params;
+        let bend = self.is_bend();
+        if bend {
+            self.sample_bend();
+        }
+        let l_k_arc_bar = self.l_k_arc_bar();
         let rod = &self.world.rods[0];
         let c = &mut self.carried;
         let force = if c.impulse_time > 0.0 {
             c.impulse / c.impulse_time
         } else {
-            pulling_force(&self.world, &self.axis)
+            pulling_force(&self.world, &self.clamps, &self.axis)
         };
         (c.impulse, c.impulse_time) = (0.0, 0.0);
         let points = rod.positions();
         let energy_unit = params.bending_stiffness() / params.h;
         let energies = step.energies;
         let pairs = self.world.contacts().iter().map(|c| (c.nodes[0], c.nodes[2]));
-        let braid = measurements::braid(pairs, c.mid);
+        let braid = if bend {
+            None
+        } else {
+            measurements::braid(pairs, c.mid)
+        };
         let geometry = braid.map(|b| {
             let (p, q) = b.loop_ends();
             (
@@ -490,12 +635,17 @@ impl<'a> Case<'a> {
         if let Some((g, ..)) = geometry {
             c.mid = (g.start + g.end) / 2;
         }
-        let torque = twist::clamp_torque(rod, self.world.stepper(0));
+        let (torque, lk, end_turns) = if bend {
+            (0.0, 0.0, 0.0)
+        } else {
+            let torque = twist::clamp_torque(rod, self.world.stepper(0));
+            (torque, c.twist.linking_number(rod), c.twist.end_turns(rod))
+        };
         self.report.series.push(Sample {
             time: c.time,
             l_k_bar,
-            l_k_arc_bar: measurements::l_k_arc_bar(&points, params.h),
-            l_c_over_l: 1.0 - l_k_bar * params.h / params.length,
+            l_k_arc_bar,
+            l_c_over_l: 1.0 - l_k_bar * params.h / params.rest_length(),
             force,
             f_bar: force / force_unit(params),
             width,
@@ -514,13 +664,42 @@ impl<'a> Case<'a> {
             e_twist_bar: energies.twisting / energy_unit,
             e_braid_bar: e_braid / energy_unit,
             e_loop_bar: e_loop / energy_unit,
-            lk: c.twist.linking_number(rod),
-            end_turns: c.twist.end_turns(rod),
+            lk,
+            end_turns,
             m_bar: torque * params.h / params.bending_stiffness(),
             stage: self.stage,
         });
         self.sample_phases.push(phase);
+        if bend {
+            return self.world.rods.iter().flat_map(Rod::positions).collect();
+        }
         points
+    }
+
+    /// A bend's own sample: each pulled clamp's F bar (averaged over the
+    /// interval, as F bar is), each rod's elastic energy and whether the
+    /// rods have come apart ([`PARTED`]).
+    fn sample_bend(&mut self) {
+        let params = self.params;
+        let c = &mut self.carried;
+        let forces = if c.impulse_time > 0.0 {
+            c.clamp_impulses.map(|i| i / c.impulse_time)
+        } else {
+            clamp_forces(&self.world, &self.clamps, &self.axis)
+        };
+        c.clamp_impulses = [0.0; 2];
+        let energy_unit = params.bending_stiffness() / params.h;
+        let rods = &self.world.rods;
+        let positions: Vec<Vec<Vector3<f64>>> = rods.iter().map(Rod::positions).collect();
+        let edge = rods[0].rest_len[0];
+        let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
+        let energy_bar = [0, 1].map(|i| energies::within(&rods[i], 0..rods[i].nodes()) / energy_unit);
+        self.report.bend_series.push(BendSample {
+            f_bar: forces.map(|f| f / force_unit(params)),
+            energy_bar,
+            apart: near.is_none() && energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR),
+            tails_free: !c.tails_held,
+        });
     }
 
     /// Hands the observer the progress after a sample at `l_k_bar`, `within`
@@ -559,24 +738,28 @@ impl<'a> Case<'a> {
 
     /// The report, with the ending's status and the run's statistics.
     fn finish(self, ending: Ending) -> CaseReport {
+        let bend = self.is_bend();
         let Case {
             mut report,
             world,
             clock,
             sample_phases,
             started,
+            clamps,
             ..
         } = self;
         report.status = ending.status;
         report.reason = ending.reason;
         report.close_events();
+        if bend {
+            report.close_bend();
+        }
         report.scaling = Some(Scaling::of(&report.params));
         report.quasi_static = QuasiStatic::of(&report, &sample_phases);
         if report.status != Status::Completed {
             report.inversion = None;
             report.hysteresis = None;
-            let r = &world.rods[0];
-            let at = (report.params.length - (r.node(r.nodes() - 1) - r.node(0)).norm()) / report.params.h;
+            let at = l_k_bar_of(&world, &clamps, &report.params);
             report.snapshots.push(Snapshot::capture(
                 &world,
                 SnapshotLabel::Failure,

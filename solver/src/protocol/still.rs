@@ -62,9 +62,8 @@ impl Case<'_> {
         mut drive: impl FnMut(&mut Rod, f64),
     ) -> Result<(), Ending> {
         self.enter_phase(phase);
-        let rod = &mut self.world.rods[0];
-        for end in [End::Start, End::Finish] {
-            rod.move_clamp(end, nalgebra::Vector3::zeros());
+        for clamp in self.clamps {
+            self.world.rods[clamp.rod].move_clamp(clamp.end, nalgebra::Vector3::zeros());
         }
         let interval = self.params.sample_interval * self.params.h / (2.0 * self.params.clamp_speed());
         let (mut elapsed, mut next_sample) = (0.0, 0.0);

@@ -11,10 +11,10 @@ use super::adaptive::{
     SLOW_AFTER, Way,
 };
 use super::events;
-use super::report::Event;
+use super::report::{Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer};
 use super::snapshots::SnapshotPlan;
-use crate::case::{Direction, LoadStage};
+use crate::case::{Direction, KnotKind, LoadStage};
 use crate::pipeline::World;
 use crate::rod::{End, Spring, node_dof};
 use crate::time_step::TimeStep;
@@ -107,6 +107,16 @@ impl Case<'_> {
             let found = self.detect(&mut travel);
             self.keep_snapshots(&mut travel.snapshots, found, l_k_bar);
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
+            if self.is_bend() && way.0 > 0.0 {
+                let f_bar = self.report.series.last().map_or(0.0, |s| s.f_bar);
+                self.release_tails(f_bar);
+            }
+            if self.report.bend_series.last().is_some_and(|b| b.apart) {
+                if self.slipped(&mut travel, &mut saved)? {
+                    continue;
+                }
+                break Ok(());
+            }
             let sample = self.report.series.last().copied().unwrap_or_default();
             let arc = sample.l_k_arc_bar;
             let stop = self.stop_at(&travel, target);
@@ -115,7 +125,7 @@ impl Case<'_> {
             if self.schedule(&mut travel, &mut saved, l_k_bar, arc)? {
                 continue;
             }
-            let tight = way.0 > 0.0 && self.params.max_force_bar.is_some_and(|m| sample.f_bar > m);
+            let tight = way.0 > 0.0 && self.params.tight_force_bar().is_some_and(|m| sample.f_bar > m);
             if (way.reached(arc, stop) || tight) && !self.review_end(&mut travel, &mut saved, arc)? {
                 break Ok(());
             }
@@ -126,6 +136,34 @@ impl Case<'_> {
         ending
     }
 
+    /// A bend's rods have parted at the last sample: a fast approach goes
+    /// back to a checkpoint before its holding point and pulls through it
+    /// slowly (returns `true`); otherwise the slip-through is recorded and
+    /// the stage ends (returns `false`).
+    fn slipped(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>) -> Result<bool, Ending> {
+        let slip = events::slip_through(
+            &self.report.series,
+            &self.report.bend_series,
+            travel.first_sample,
+            self.stage,
+        );
+        let Some(slip) = slip else {
+            return Ok(false);
+        };
+        let held = slip.at.l_k_arc_bar;
+        if travel.phase == Phase::Approach {
+            let back = travel.way.back(held, travel.way.restart_before());
+            if self.restart(travel, saved, back, Some(held), Outcome::Restarted)? {
+                return Ok(true);
+            }
+        }
+        self.record(Event {
+            restarts: travel.restarts,
+            ..slip
+        });
+        Ok(false)
+    }
+
     /// Where (the knot's own length) the current stage stops: its target; a
     /// tightening without one at the stopping rules (`min_l_k_bar`, or
     /// `stop_after_inversion` past its inversion).
@@ -134,7 +172,9 @@ impl Case<'_> {
         match (target, travel.event, self.params.stop_after_inversion) {
             (Some(x), ..) if travel.way.0 < 0.0 => x,
             (Some(x), ..) => x.max(floor),
-            (None, Some(e), Some(margin)) => (e.at.l_k_arc_bar - margin).max(floor),
+            (None, Some(e), Some(margin)) if e.kind == EventKind::Inversion => {
+                (e.at.l_k_arc_bar - margin).max(floor)
+            }
             (None, ..) => floor,
         }
     }
@@ -282,13 +322,14 @@ impl Case<'_> {
         self.drive(travel, travel.phase_start);
     }
 
-    /// Both clamps (or, on springs, both grips) moving along the stage at the
-    /// phase's speed at `l_k_bar`; the slow phases' by what the tails'
-    /// stretch takes up ([`adaptive::stretch_factor`]).
+    /// Both pulled clamps (or, on springs, both grips) moving along the
+    /// stage at the phase's speed at `l_k_bar`; an overhand knot's slow
+    /// phases by what its tails' stretch takes up
+    /// ([`adaptive::stretch_factor`]; other knots have no tails measured).
     fn drive(&mut self, travel: &Travel, l_k_bar: f64) {
         let pulled = travel.way.along(travel.phase_start, l_k_bar);
         let stretch = match travel.phase {
-            Phase::Snap | Phase::Fallback => {
+            Phase::Snap | Phase::Fallback if self.params.knot == KnotKind::Overhand => {
                 let spec = self.params.knot_spec();
                 let tails = (spec.length - spec.knot_length()) / self.params.h;
                 adaptive::stretch_factor(&self.report.series[travel.first_sample..], tails)
@@ -303,8 +344,9 @@ impl Case<'_> {
             return;
         }
         let v = self.axis * speed;
-        rod.move_clamp(End::Start, -v);
-        rod.move_clamp(End::Finish, v);
+        let [first, second] = self.clamps;
+        self.world.rods[first.rod].move_clamp(first.end, -v);
+        self.world.rods[second.rod].move_clamp(second.end, v);
     }
 
     /// Back to checkpoint `c` of a fast approach, to move slowly through the
@@ -321,6 +363,7 @@ impl Case<'_> {
         travel.restarts = restarts;
         self.report.stats.restarts += 1;
         self.report.series.truncate(c.series);
+        self.report.bend_series.truncate(c.series);
         self.sample_phases.truncate(c.series);
         self.report.snapshots.truncate(c.snapshots);
         self.report.events.truncate(c.events);
@@ -342,13 +385,21 @@ impl Case<'_> {
             return None;
         }
         let criteria = self.criteria();
-        let found = events::detect(
-            &self.report.series,
-            travel.first_sample,
-            travel.way,
-            &criteria,
-            self.stage,
-        )
+        let found = if self.is_bend() {
+            (travel.way.0 > 0.0)
+                .then(|| {
+                    events::detect_bend_snap(&self.report.series, travel.first_sample, &criteria, self.stage)
+                })
+                .flatten()
+        } else {
+            events::detect(
+                &self.report.series,
+                travel.first_sample,
+                travel.way,
+                &criteria,
+                self.stage,
+            )
+        }
         .map(|e| Event {
             restarts: travel.restarts,
             ..e

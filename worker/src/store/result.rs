@@ -33,6 +33,12 @@ pub struct ResultDetails {
     pub events: Vec<Event>,
     pub hysteresis: Option<Hysteresis>,
     pub quasi_static: Option<QuasiStatic>,
+    /// A bend's holding force (F bar) and whether its rods still hold each
+    /// other at the end; none for a knot in one rod.
+    #[serde(default)]
+    pub holding_force_bar: Option<f64>,
+    #[serde(default)]
+    pub tied: Option<bool>,
     pub scaling: Option<Scaling>,
 }
 
@@ -45,6 +51,8 @@ impl From<&CaseReport> for ResultDetails {
             events: report.events.clone(),
             hysteresis: report.hysteresis,
             quasi_static: report.quasi_static,
+            holding_force_bar: report.holding_force_bar,
+            tied: report.tied,
             scaling: report.scaling,
         }
     }

@@ -539,6 +539,7 @@ fn snapshot(label: SnapshotLabel, l_k_bar: f64) -> solver::snapshot::Snapshot {
         curvature: vec![0.5, 0.25],
         velocity: vec![[0.0, 0.5, 1.0], [-1.0, 0.25, 0.0]],
         contacts: Vec::new(),
+        rods: Vec::new(),
     }
 }
 

@@ -164,10 +164,9 @@ impl Family for KnotSpec {
     }
 
     fn tie(&self) -> Result<StartShape, KnotError> {
-        build(self).map(|shape| StartShape {
-            loop_middle: (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2,
-            rods: vec![shape.points],
-            alexander: self.alexander(),
+        build(self).map(|shape| {
+            let middle = (shape.regions.loop_arc.start + shape.regions.loop_arc.end) / 2;
+            StartShape::one_rod(shape.points, middle, self.alexander())
         })
     }
 

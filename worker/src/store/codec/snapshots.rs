@@ -141,6 +141,7 @@ pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
                 curvature,
                 velocity,
                 contacts: contacts.by_ref().take(contact_len[i]).collect(),
+                rods: Vec::new(),
             },
         )
         .collect();
@@ -257,6 +258,7 @@ mod tests {
                                 curvature: if full { curvature } else { Vec::new() },
                                 velocity: if full { velocity } else { Vec::new() },
                                 contacts,
+                                rods: Vec::new(),
                             }
                         },
                     )
@@ -332,6 +334,7 @@ mod tests {
             curvature: Vec::new(),
             velocity: Vec::new(),
             contacts: Vec::new(),
+            rods: Vec::new(),
         };
         let good = pack_snapshots(std::slice::from_ref(&shot));
         assert_eq!(unpack_snapshots(&good).unwrap(), [shot]);

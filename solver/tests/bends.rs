@@ -1,0 +1,241 @@
+//! Bends: two rods tied loose and contact-free, their diagrams told apart by
+//! their crossings, their symmetry, and the case parameters that choose them.
+use nalgebra::Vector3;
+use solver::case::{CaseParams, KnotKind};
+use solver::knot::{Bend, BendSpec, StartShape};
+use solver::rod::End;
+
+const BENDS: [Bend; 4] = [Bend::Reef, Bend::Granny, Bend::Thief, Bend::Grief];
+
+fn tie(bend: Bend) -> (BendSpec, StartShape) {
+    let spec = BendSpec {
+        bend,
+        length: 1.0,
+        nodes: 301,
+        radius: 1.6e-3,
+    };
+    let shape = spec.tie().unwrap_or_else(|e| panic!("{bend:?}: {e}"));
+    (spec, shape)
+}
+
+/// Closest distance between segments `p0 p1` and `q0 q1` (sampled finely:
+/// an independent check of the builder's broad-phase clearance test).
+fn segment_distance(p0: &Vector3<f64>, p1: &Vector3<f64>, q0: &Vector3<f64>, q1: &Vector3<f64>) -> f64 {
+    let n = 24;
+    let mut best = f64::INFINITY;
+    for i in 0..=n {
+        let p = p0 + (p1 - p0) * (i as f64 / n as f64);
+        for j in 0..=n {
+            let q = q0 + (q1 - q0) * (j as f64 / n as f64);
+            best = best.min((p - q).norm());
+        }
+    }
+    best
+}
+
+/// Each bend: two rods of K nodes and rest length L, clamped at their first
+/// nodes on either side of the knot, no two strands of different rods
+/// within 2h, and close where they cross: within 2 LIFT = 3.6 h.
+#[test]
+fn bends_are_tied_loose_and_contact_free() {
+    for bend in BENDS {
+        let (spec, shape) = tie(bend);
+        assert_eq!(shape.rods.len(), 2);
+        assert!(shape.alexander.is_none(), "a bend has no Alexander polynomial");
+        for rod in &shape.rods {
+            assert_eq!(rod.len(), spec.nodes);
+            let edge = spec.length / (spec.nodes - 1) as f64;
+            assert!(
+                rod.windows(2)
+                    .all(|w| ((w[1] - w[0]).norm() - edge).abs() < 1e-9 * edge)
+            );
+        }
+        assert_eq!(
+            shape.clamps.map(|c| (c.rod, c.end)),
+            [(0, End::Start), (1, End::Start)]
+        );
+        let [a, b] = shape.clamp_points();
+        assert!(
+            a.x < -0.3 && b.x > 0.3,
+            "{bend:?}: standing ends on either side: {a:?} {b:?}"
+        );
+        let (r0, r1) = (&shape.rods[0], &shape.rods[1]);
+        let near = |p: &Vector3<f64>, q: &Vector3<f64>| (p - q).norm() < 0.05;
+        let mut closest = f64::INFINITY;
+        for i in 0..r0.len() - 1 {
+            for j in 0..r1.len() - 1 {
+                if near(&r0[i], &r1[j]) {
+                    closest = closest.min(segment_distance(&r0[i], &r0[i + 1], &r1[j], &r1[j + 1]));
+                }
+            }
+        }
+        let h = spec.radius;
+        assert!(
+            closest >= 2.0 * h && closest < 3.6 * h,
+            "{bend:?}: closest {} h",
+            closest / h
+        );
+    }
+}
+
+/// The rods' crossings seen along z: sign +1 where the upper strand's
+/// direction turns counter-clockwise onto the lower's.
+fn crossing_signs(shape: &StartShape) -> Vec<f64> {
+    let (a, b) = (&shape.rods[0], &shape.rods[1]);
+    let mut signs = Vec::new();
+    for i in 0..a.len() - 1 {
+        for j in 0..b.len() - 1 {
+            let (d, e, r) = (a[i + 1] - a[i], b[j + 1] - b[j], b[j] - a[i]);
+            let den = d.x * e.y - d.y * e.x;
+            if den.abs() < 1e-18 {
+                continue;
+            }
+            let s = (r.x * e.y - r.y * e.x) / den;
+            let t = (r.x * d.y - r.y * d.x) / den;
+            if !((0.0..1.0).contains(&s) && (0.0..1.0).contains(&t)) {
+                continue;
+            }
+            let (za, zb) = (a[i].z + s * d.z, b[j].z + t * e.z);
+            let (upper, lower) = if za > zb { (d, e) } else { (e, d) };
+            signs.push((upper.x * lower.y - upper.y * lower.x).signum());
+        }
+    }
+    signs
+}
+
+/// The diagrams: six crossings between the rods; the reef's and thief's
+/// signs sum to zero (the square knot is a knot and its mirror), the
+/// granny's and grief's all agree (the rods twist about each other).
+#[test]
+fn crossing_signs_tell_the_reef_from_the_granny() {
+    for bend in BENDS {
+        let (_, shape) = tie(bend);
+        let signs = crossing_signs(&shape);
+        assert_eq!(signs.len(), 6, "{bend:?}");
+        let sum: f64 = signs.iter().sum();
+        match bend {
+            Bend::Reef | Bend::Thief => assert_eq!(sum, 0.0, "{bend:?}: {signs:?}"),
+            Bend::Granny | Bend::Grief => assert_eq!(sum.abs(), 6.0, "{bend:?}: {signs:?}"),
+        }
+    }
+}
+
+/// The reef and granny are symmetric under a half turn about the y axis,
+/// which swaps the rods node by node; the thief and grief pull rod 1 by the
+/// other end: the same curves, rod 1 read backwards.
+#[test]
+fn the_reef_and_granny_swap_their_rods_under_a_half_turn() {
+    for bend in [Bend::Reef, Bend::Granny] {
+        let (spec, shape) = tie(bend);
+        let turned = shape.rods[0].iter().map(|p| Vector3::new(-p.x, p.y, -p.z));
+        let worst = turned
+            .zip(&shape.rods[1])
+            .map(|(p, q)| (p - q).norm())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9 * spec.length, "{bend:?}: {worst}");
+    }
+    for (pulled, by_other_end) in [(Bend::Reef, Bend::Thief), (Bend::Granny, Bend::Grief)] {
+        let (_, a) = tie(pulled);
+        let (_, b) = tie(by_other_end);
+        assert_eq!(a.rods[0], b.rods[0]);
+        let standing = b.clamp_points()[1];
+        assert!(standing.y > 0.0 && a.clamp_points()[1].y < 0.0);
+        // Rod 1's tail end in the reef is near where the thief's is pulled from.
+        let tail = a.rods[1][a.rods[1].len() - 1];
+        assert!((tail.y - standing.y).abs() < 1e-9, "{tail:?} {standing:?}");
+    }
+}
+
+/// A bend is chosen by `knot`; its case refuses the one-rod knot's
+/// parameters, a start twist and rotating or soft stages, naming the field.
+#[test]
+fn bend_cases_are_checked_naming_the_field() {
+    let reef = CaseParams {
+        knot: KnotKind::Reef,
+        ..CaseParams::default()
+    };
+    assert!(reef.validate().is_ok(), "{:?}", reef.validate());
+    assert_eq!(reef.knot_label(), "reef");
+    assert_eq!(reef.rest_length(), 2.0 * reef.length);
+    assert_eq!(reef.tight_force_bar(), Some(solver::case::BEND_TIGHT_FORCE_BAR));
+    let field = |p: CaseParams| p.validate().unwrap_err()[0].field.clone();
+    assert_eq!(field(CaseParams { n: 4, ..reef.clone() }), "n");
+    assert_eq!(
+        field(CaseParams {
+            start_twist: Some(1.0),
+            ..reef.clone()
+        }),
+        "start_twist"
+    );
+    let rotate: Vec<solver::case::LoadStage> =
+        serde_json::from_str(r#"[{"rotate": {"turns": 1}}, {"pull": {}}]"#).unwrap();
+    assert_eq!(
+        field(CaseParams {
+            loading: Some(rotate),
+            ..reef.clone()
+        }),
+        "loading"
+    );
+    assert_eq!(
+        field(CaseParams {
+            initial_shape: Some(vec![[0.0; 3]; 3]),
+            ..reef.clone()
+        }),
+        "initial_shape"
+    );
+    assert_eq!(field(CaseParams { length: 0.2, ..reef }), "length");
+}
+
+/// The reef knot pulled by its standing ends (mu = 0.2): the two clamps pull
+/// alike and the two rods, which a half turn swaps, hold the same energy,
+/// at every sample (within 1 % and 2 % where F bar is above a tenth of its
+/// largest); the case completes with the rods parted or tight, its holding
+/// force the largest F bar with the tails free.
+#[test]
+fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
+    let params = CaseParams {
+        knot: KnotKind::Reef,
+        mu: 0.2,
+        ..CaseParams::default()
+    };
+    let report = solver::protocol::run(&params, &mut |_| true);
+    assert_eq!(
+        report.status,
+        solver::protocol::Status::Completed,
+        "{}",
+        report.reason
+    );
+    assert_eq!(report.bend_series.len(), report.series.len());
+    let largest = report.series.iter().map(|s| s.f_bar).fold(0.0, f64::max);
+    for (s, b) in report.series.iter().zip(&report.bend_series) {
+        if s.f_bar > 0.1 * largest {
+            let [f0, f1] = b.f_bar;
+            assert!(
+                (f0 - f1).abs() <= 0.01 * f0.abs().max(f1.abs()),
+                "at {}: {f0} {f1}",
+                s.l_k_bar
+            );
+            assert!((0.5 * (f0 + f1) - s.f_bar).abs() <= 1e-9 * s.f_bar.abs() + 1e-12);
+        }
+        let [e0, e1] = b.energy_bar;
+        assert!(
+            (e0 - e1).abs() <= 0.02 * e0.max(e1),
+            "at {}: {e0} {e1}",
+            s.l_k_bar
+        );
+    }
+    let holding = report
+        .holding_force_bar
+        .expect("a bend reports its holding force");
+    let free_largest = (report.series.iter().zip(&report.bend_series))
+        .filter(|(_, b)| b.tails_free)
+        .map(|(s, _)| s.f_bar)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(holding, free_largest);
+    let slipped = report
+        .events
+        .iter()
+        .any(|e| e.kind == solver::protocol::EventKind::SlipThrough);
+    assert_eq!(report.tied, Some(!slipped));
+    assert!(report.alexander_initial.is_none() && report.determinant_final.is_none());
+}

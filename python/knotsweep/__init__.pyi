@@ -153,7 +153,7 @@ def run(
     *,
     progress: bool | Callable[[Progress], Any] | None = None,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
     start_twist: float | None = None,
@@ -205,8 +205,12 @@ def run(
           the closure of braid_word opened into a long knot. Each is tied loose and contact-free, clamped at
           both ends and pulled apart; its Alexander polynomial is checked on the start shape and at the end
           and reported (alexander_initial, alexander_final: coefficients, lowest power first), and the knot
-          determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). Range: "overhand" or
-          "figure_eight" or "braid". Default: "overhand". Paper: "overhand".
+          determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends "reef",
+          "granny", "thief" and "grief" tie two rods of length L together, pull their standing ends apart with
+          the tails free until tight (max_force_bar, default 0.05) or until the rods slip apart, and report
+          whether the rods still hold each other and the holding force (the largest F bar before they part),
+          with l_k bar = (2L - the pulled clamps' distance) / h. Range: "overhand" or "figure_eight" or
+          "braid" or "reef" or "granny" or "thief" or "grief". Default: "overhand". Paper: "overhand".
       n: Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).
           Range: integer in 1..=8. Default: 3.
       braid_word: The braid whose closure knot "braid" ties: generators s1 ... s4 (s_i crosses strands i and i
@@ -315,8 +319,8 @@ def run(
           segments between the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth
           of one edge's period in force curves) or "smooth" (C1 cubic curves through the nodes: gap, normal
           and the forces' weights on the nodes vary smoothly as one rod slides along another; a rope pulled
-          over a rod wavers by 0.46 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to
-          3.8 % of F bar and its inversion to 128.7, at five times the cost: docs/FIDELITY.md, "Contact
+          over a rod wavers by 0.40 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to
+          0.93 % of F bar and its inversion to 128.8, at five times the cost: docs/FIDELITY.md, "Contact
           geometry"). Range: "segment" or "smooth". Default: "segment". Paper: "segment".
       nodes: Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the
           paper's rod is resolved (docs/FIDELITY.md, "Any rod": the convergence in K). The report's params
@@ -351,7 +355,7 @@ def run(
 def validate(
     *,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
     start_twist: float | None = None,

@@ -124,6 +124,7 @@ pub fn run(args: Args) -> Result<()> {
     let body = serde_json::to_vec(&spec_value)?;
     let (spec, raw) = Core::parse_spec(&body).map_err(|e| anyhow::anyhow!(describe(e)))?;
     let out = args.out.clone().unwrap_or_else(|| default_out(&args));
+    let refinement = args.refine.as_deref().map(refine_spec).transpose()?;
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async move {
         let store = crate::worker::open(&args.queue.database_url).await?;
@@ -138,6 +139,11 @@ pub fn run(args: Args) -> Result<()> {
             .await
             .map_err(|e| anyhow::anyhow!(describe(e)))?;
         let mut id = submitted.sweep.summary.id;
+        // A refinement's tolerances are checked now, not after the sweep has run.
+        if let Some(r) = &refinement {
+            r.check(id, &submitted.sweep.varied)
+                .map_err(|e| anyhow::anyhow!(describe(e)))?;
+        }
         if submitted.replayed {
             let state = submitted.sweep.summary.state.clone();
             if state == SweepState::Cancelled.as_str() {
@@ -205,8 +211,8 @@ pub fn run(args: Args) -> Result<()> {
             }
         };
         bar.finish_and_clear();
-        let refined = match (&args.refine, finished) {
-            (Some(text), true) => refine(&core, id, refine_spec(text)?, &mut signal).await?,
+        let refined = match (refinement, finished) {
+            (Some(spec), true) => refine(&core, id, spec, &mut signal).await?,
             _ => true,
         };
         pool.shutdown().await;
@@ -373,4 +379,43 @@ pub(crate) fn write_figure(dir: &std::path::Path, stem: &str, svg: &str) -> Resu
     std::fs::write(&path, report::pdf::svg_to_pdf(svg)?)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::refine_spec;
+    use knotsweep_server::error::CoreError;
+
+    /// `--refine` reads `AXIS=TOL` pairs and refuses what is not one; the
+    /// tolerances are checked against the sweep's axes before it runs.
+    #[test]
+    fn refine_flag_is_read_and_checked_before_the_sweep_runs() {
+        let spec = refine_spec(" h=2e-4, mu=0.02,").unwrap();
+        assert_eq!(spec.tolerance.len(), 2);
+        assert_eq!((spec.tolerance["h"], spec.tolerance["mu"]), (2e-4, 0.02));
+        assert!(
+            refine_spec("h")
+                .unwrap_err()
+                .to_string()
+                .contains("AXIS=TOLERANCE")
+        );
+        assert!(
+            refine_spec("h=wide")
+                .unwrap_err()
+                .to_string()
+                .contains("not a number")
+        );
+
+        let varied = ["h".to_string(), "mu".to_string()];
+        assert!(spec.check(7, &varied).is_ok());
+        let Err(CoreError::Invalid(fields)) = refine_spec("n=1,mu=0").unwrap().check(7, &varied) else {
+            panic!("an axis the sweep does not vary and a zero tolerance are refused");
+        };
+        let names: Vec<&str> = fields.iter().map(|f| f.field.as_str()).collect();
+        assert_eq!(names, ["tolerance.mu", "tolerance.n"]);
+        assert!(
+            fields[1].reason.contains("not a varied axis of sweep 7"),
+            "{fields:?}"
+        );
+    }
 }

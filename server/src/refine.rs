@@ -34,6 +34,56 @@ pub struct RefineSpec {
     pub tolerance: BTreeMap<String, f64>,
 }
 
+impl RefineSpec {
+    /// Checks the tolerances against sweep `id`'s varied axes: at least one,
+    /// each on a numeric varied axis, each positive.
+    pub fn check(&self, id: i64, varied: &[String]) -> Result<(), CoreError> {
+        let mut errors = Vec::new();
+        if self.tolerance.is_empty() {
+            errors.push(FieldError::new(
+                "tolerance",
+                format!(
+                    "give at least one varied axis of the sweep: {}",
+                    varied.join(", ")
+                ),
+            ));
+        }
+        for (axis, tol) in &self.tolerance {
+            let numeric = (solver::case::PARAMETERS.iter()).any(|p| {
+                p.name == axis
+                    && matches!(
+                        p.range,
+                        Range::Interval(..) | Range::LengthOver(..) | Range::Integers(..)
+                    )
+            });
+            if !varied.contains(axis) {
+                errors.push(FieldError::new(
+                    format!("tolerance.{axis}"),
+                    format!(
+                        "not a varied axis of sweep {id} (those are: {})",
+                        varied.join(", ")
+                    ),
+                ));
+            } else if !numeric {
+                errors.push(FieldError::new(
+                    format!("tolerance.{axis}"),
+                    "only a numeric axis can be bisected",
+                ));
+            }
+            if !(tol.is_finite() && *tol > 0.0) {
+                errors.push(FieldError::new(
+                    format!("tolerance.{axis}"),
+                    "must be a positive number",
+                ));
+            }
+        }
+        match errors.is_empty() {
+            true => Ok(()),
+            false => Err(CoreError::Invalid(errors)),
+        }
+    }
+}
+
 /// What a case gave, as the map tells them apart.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
 #[serde(rename_all = "snake_case")]
@@ -243,48 +293,7 @@ impl Core {
     /// one of the sweep runs.
     pub async fn submit_refinement(&self, id: i64, spec: RefineSpec) -> Result<RefinementView, CoreError> {
         let detail = self.sweep(id).await?;
-        let mut errors = Vec::new();
-        if spec.tolerance.is_empty() {
-            errors.push(FieldError::new(
-                "tolerance",
-                format!(
-                    "give at least one varied axis of the sweep: {}",
-                    detail.varied.join(", ")
-                ),
-            ));
-        }
-        for (axis, tol) in &spec.tolerance {
-            let numeric = (solver::case::PARAMETERS.iter()).any(|p| {
-                p.name == axis
-                    && matches!(
-                        p.range,
-                        Range::Interval(..) | Range::LengthOver(..) | Range::Integers(..)
-                    )
-            });
-            if !detail.varied.contains(axis) {
-                errors.push(FieldError::new(
-                    format!("tolerance.{axis}"),
-                    format!(
-                        "not a varied axis of sweep {id} (those are: {})",
-                        detail.varied.join(", ")
-                    ),
-                ));
-            } else if !numeric {
-                errors.push(FieldError::new(
-                    format!("tolerance.{axis}"),
-                    "only a numeric axis can be bisected",
-                ));
-            }
-            if !(tol.is_finite() && *tol > 0.0) {
-                errors.push(FieldError::new(
-                    format!("tolerance.{axis}"),
-                    "must be a positive number",
-                ));
-            }
-        }
-        if !errors.is_empty() {
-            return Err(CoreError::Invalid(errors));
-        }
+        spec.check(id, &detail.varied)?;
         if let Some(json) = self.store().refinement(id).await? {
             let before: RefinementView = parse_view(&format!("sweep {id}'s refinement"), &json)?;
             if before.status == RefineStatus::Running {

@@ -246,9 +246,14 @@ mod tests {
         .unwrap();
         assert_eq!(from_file.start(), built.start());
         let [a, b] = [&built, &from_file].map(|case| protocol::run_valid(case, &mut |_| true));
-        assert_eq!((a.status, b.status), (protocol::Status::Completed, protocol::Status::Completed));
+        assert_eq!(
+            (a.status, b.status),
+            (protocol::Status::Completed, protocol::Status::Completed)
+        );
         let bits = |r: &protocol::CaseReport| -> Vec<(u64, u64)> {
-            (r.series.iter()).map(|s| (s.l_k_bar.to_bits(), s.f_bar.to_bits())).collect()
+            (r.series.iter())
+                .map(|s| (s.l_k_bar.to_bits(), s.f_bar.to_bits()))
+                .collect()
         };
         assert!(!a.series.is_empty());
         assert_eq!(bits(&a), bits(&b));

@@ -108,7 +108,15 @@ fn a_bends_rods_read_back_as_a_block_each() {
     let dir = tempfile::tempdir().unwrap();
     let status = Command::new(env!("CARGO_BIN_EXE_knotsweep"))
         .args(["run", "--knot", "reef", "--length", "0.4", "--nodes", "121"])
-        .args(["--relax-time", "0.1", "--pull-speed", "0.01", "--min-l-k-bar", "100", "--out"])
+        .args([
+            "--relax-time",
+            "0.1",
+            "--pull-speed",
+            "0.01",
+            "--min-l-k-bar",
+            "100",
+            "--out",
+        ])
         .arg(dir.path().join("reef.json"))
         .arg("--vtk")
         .arg(dir.path().join("vtk"))

@@ -80,7 +80,7 @@ pub fn case_files(name: &str, radius: f64, snapshots: &[Snapshot]) -> Vec<VtkFil
 /// The nodes of each rod of `f` in its `points`: all of them for one rod.
 fn node_ranges(f: &Snapshot) -> Vec<Range<usize>> {
     if f.rods.is_empty() {
-        return vec![0..f.points.len()];
+        return std::iter::once(0..f.points.len()).collect();
     }
     let mut start = 0;
     (f.rods.iter())

@@ -125,14 +125,25 @@ impl InitialShape {
     /// the field: `initial_shape`, or the rod or end within it
     /// (`initial_shape.rods[1].finish`).
     pub fn checked(&self, knot: &Knot, rod: (f64, usize, f64)) -> Result<StartShape, FieldError> {
-        let rods = match self {
-            InitialShape::Points(points) => return one_rod(points, knot, rod, "initial_shape"),
-            InitialShape::Rods { rods } => rods,
+        let two = matches!(knot, Knot::Bend(_));
+        let rods = match (self, two) {
+            (InitialShape::Points(points), false) => return one_rod(points, knot, rod, "initial_shape"),
+            (InitialShape::Points(_), true) => {
+                return Err(FieldError::new(
+                    "initial_shape",
+                    format!(
+                        "one rod given; {} ties two: give {{\"rods\": [...]}} with both (docs/API.md, \"Start \
+                         shapes\")",
+                        knot.name()
+                    ),
+                ));
+            }
+            (InitialShape::Rods { rods }, _) => rods,
         };
         let refuse =
             |field: String, reason: String| FieldError::new(format!("initial_shape.{field}"), reason);
-        match (rods.len(), knot.alexander()) {
-            (1, Some(_)) => {
+        match (rods.len(), two) {
+            (1, false) => {
                 let r = &rods[0];
                 for (name, role) in [("start", r.start), ("finish", r.finish)] {
                     if role != EndRole::Pulled {
@@ -147,24 +158,21 @@ impl InitialShape {
                 }
                 one_rod(&r.points, knot, rod, "initial_shape.rods[0].points")
             }
-            (2, None) => bend(rods, rod).map_err(|(field, reason)| refuse(field, reason)),
-            (count, alexander) => Err(refuse(
+            (2, true) => bend(rods, rod).map_err(|(field, reason)| refuse(field, reason)),
+            (count, _) => Err(refuse(
                 "rods".to_string(),
                 format!(
-                    "{} rods given; {} ties {}",
-                    count,
+                    "{count} rods given; {} ties {}",
                     knot.name(),
-                    match alexander {
-                        Some(_) => "one",
-                        None => "two",
-                    }
+                    if two { "two" } else { "one" }
                 ),
             )),
         }
     }
 }
 
-/// A knot in one rod from its `points`, errors naming `field`.
+/// A knot in one rod from its `points`, checked against its Alexander
+/// polynomial; errors naming `field`.
 fn one_rod(
     points: &[[f64; 3]],
     knot: &Knot,
@@ -175,7 +183,7 @@ fn one_rod(
         return Err(FieldError::new(
             field,
             format!(
-                "one rod given; {} ties two: give {{\"rods\": [...]}} with both (docs/API.md, \"Start shapes\")",
+                "{} has no knot type to check a rod against: the solver builds it, leave initial_shape out",
                 knot.name()
             ),
         ));

@@ -119,7 +119,8 @@ impl InitialShape {
     /// The shape checked for `knot` with rods of (`length`, `nodes`, radius
     /// `h`): a knot in one rod by [`knot::checked_start`]; a bend's two rods
     /// each by [`knot::checked_rod`], one end of each pulled, and no two of
-    /// their segments closer than 2h ([`knot::check_rods_clearance`]). Its
+    /// their segments closer than 2h by more than 1 %
+    /// ([`knot::check_rods_clearance`]). Its
     /// knot type is not checked: no invariant tells two open rods' tangles
     /// apart (the run reports whether they hold each other). An error names
     /// the field: `initial_shape`, or the rod or end within it

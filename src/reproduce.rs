@@ -55,7 +55,7 @@ fn perturbed(key: &'static str, n: u32, seed: u64, figures: &Path) -> Result<Job
     let mut rng = solver::validation::rng::SplitMix64::new(seed);
     let r = PERTURBATION * params.h;
     let last = shape.points.len() - 2;
-    let points = shape
+    let points: Vec<[f64; 3]> = shape
         .points
         .iter()
         .enumerate()
@@ -68,7 +68,7 @@ fn perturbed(key: &'static str, n: u32, seed: u64, figures: &Path) -> Result<Job
             [x.x, x.y, x.z]
         })
         .collect();
-    params.initial_shape = Some(points);
+    params.initial_shape = Some(points.into());
     let file = figures.join("starts").join(format!("{key}.txt"));
     Ok(Job {
         key: key.to_string(),
@@ -81,7 +81,10 @@ fn perturbed(key: &'static str, n: u32, seed: u64, figures: &Path) -> Result<Job
 /// (`x y z` per line, every digit kept: the run from the file is the run here).
 fn write_shapes(jobs: &[Job]) -> Result<()> {
     for j in jobs {
-        let (Some(file), Some(points)) = (&j.shape_file, &j.params.initial_shape) else {
+        let (Some(file), Some(points)) = (
+            &j.shape_file,
+            j.params.initial_shape.as_ref().and_then(|s| s.points()),
+        ) else {
             continue;
         };
         let path = Path::new(file);
@@ -288,7 +291,7 @@ mod tests {
                 panic!("n = {n}: {errors:?}");
             }
             let built = solver::knot::build(&j.params.knot_spec()).unwrap();
-            let moved = j.params.initial_shape.as_ref().unwrap();
+            let moved = j.params.initial_shape.as_ref().and_then(|s| s.points()).unwrap();
             let largest = built
                 .points
                 .iter()
@@ -308,7 +311,7 @@ mod tests {
         write_shapes(std::slice::from_ref(&j)).unwrap();
         let text = std::fs::read_to_string(j.shape_file.as_ref().unwrap()).unwrap();
         assert_eq!(
-            crate::run::read_points(&text).unwrap(),
+            crate::run::read_shape(&text).unwrap(),
             j.params.initial_shape.unwrap()
         );
     }

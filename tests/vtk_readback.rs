@@ -12,19 +12,21 @@ use reqwest::StatusCode;
 use std::path::Path;
 use std::process::Command;
 
-/// Checks the `.pvd` at `argv[1]` and its files, centre lines of `argv[2]`
-/// nodes; `argv[3]`, when given, is a zip to unpack beside the `.pvd` first.
+/// Checks the `.pvd` at `argv[1]` and its files, a centre line per rod of
+/// `argv[2]` nodes (comma separated: a bend's rods are parts 0 and 1, the
+/// contacts the last part); `argv[3]`, when given, is a zip to unpack beside
+/// the `.pvd` first.
 /// Exit 3: no `vtk` module (the XML checks passed).
 const CHECK: &str = r#"
 import os, sys, zipfile, xml.etree.ElementTree as ET
-pvd, nodes = sys.argv[1], int(sys.argv[2])
+pvd, nodes = sys.argv[1], [int(n) for n in sys.argv[2].split(",")]
 if len(sys.argv) > 3:
     zipfile.ZipFile(sys.argv[3]).extractall(os.path.dirname(pvd))
 sets = ET.parse(pvd).getroot().findall("./Collection/DataSet")
 parts = {}
 for s in sets:
-    parts.setdefault(s.get("part"), []).append((float(s.get("timestep")), s.get("file")))
-assert sorted(parts) == ["0", "1"], parts.keys()
+    parts.setdefault(int(s.get("part")), []).append((float(s.get("timestep")), s.get("file")))
+assert sorted(parts) == list(range(len(nodes) + 1)), parts.keys()
 for part in parts.values():
     times = [t for t, _ in part]
     assert len(times) >= 2 and all(a < b for a, b in zip(times, times[1:])), f"times not increasing: {times}"
@@ -39,11 +41,13 @@ def read(f):
     arrays = {pd.GetArrayName(i): pd.GetArray(i).GetNumberOfComponents() for i in range(pd.GetNumberOfArrays())}
     return out, arrays, out.GetFieldData().GetArray("TimeValue").GetValue(0)
 contacts = 0
-for (t, f), (_, g) in zip(parts["0"], parts["1"]):
-    line, arrays, time = read(f)
-    assert line.GetNumberOfPoints() == nodes and line.GetNumberOfLines() == 1, (f, line.GetNumberOfPoints())
-    assert arrays == {"radius": 1, "twist_rate": 1, "curvature": 1, "velocity": 3}, (f, arrays)
-    assert time == t, (f, time, t)
+for k, (t, g) in enumerate(parts[len(nodes)]):
+    for rod, n in enumerate(nodes):
+        f = parts[rod][k][1]
+        line, arrays, time = read(f)
+        assert line.GetNumberOfPoints() == n and line.GetNumberOfLines() == 1, (f, line.GetNumberOfPoints())
+        assert arrays == {"radius": 1, "twist_rate": 1, "curvature": 1, "velocity": 3}, (f, arrays)
+        assert time == t, (f, time, t)
     points, arrays, _ = read(g)
     assert points.GetNumberOfVerts() == points.GetNumberOfPoints(), g
     assert arrays == {"stick": 1, "normal_force": 3, "friction_force": 3}, (g, arrays)
@@ -53,9 +57,10 @@ print(f"vtk {vtk.vtkVersion.GetVTKVersion()} read {len(sets)} files: {nodes} poi
 "#;
 
 /// Runs [`CHECK`] (panicking on a failed check; [`missing`] without python3 or VTK).
-fn check(pvd: &Path, nodes: usize, zip: Option<&Path>) {
+fn check(pvd: &Path, nodes: &[usize], zip: Option<&Path>) {
+    let nodes: Vec<String> = nodes.iter().map(usize::to_string).collect();
     let mut cmd = Command::new("python3");
-    cmd.args(["-c", CHECK]).arg(pvd).arg(nodes.to_string()).args(zip);
+    cmd.args(["-c", CHECK]).arg(pvd).arg(nodes.join(",")).args(zip);
     let out = match cmd.output() {
         Ok(out) => out,
         Err(e) => return missing(&format!("no python3 ({e})")),
@@ -94,7 +99,31 @@ fn run_vtk_files_read_back() {
         .status()
         .expect("knotsweep runs");
     assert!(status.success());
-    check(&dir.path().join("vtk/tiny.pvd"), 102, None);
+    check(&dir.path().join("vtk/tiny.pvd"), &[102], None);
+}
+
+/// A bend: a block per rod, each of its own nodes, then the contacts.
+#[test]
+fn a_bends_rods_read_back_as_a_block_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_knotsweep"))
+        .args(["run", "--knot", "reef", "--length", "0.4", "--nodes", "121"])
+        .args([
+            "--relax-time",
+            "0.1",
+            "--pull-speed",
+            "0.01",
+            "--min-l-k-bar",
+            "100",
+            "--out",
+        ])
+        .arg(dir.path().join("reef.json"))
+        .arg("--vtk")
+        .arg(dir.path().join("vtk"))
+        .status()
+        .expect("knotsweep runs");
+    assert!(status.success());
+    check(&dir.path().join("vtk/reef.pvd"), &[121, 121], None);
 }
 
 #[tokio::test]
@@ -121,6 +150,6 @@ async fn snapshots_zip_reads_back() {
     );
     let zip = dir.path().join("snapshots.zip");
     std::fs::write(&zip, r.bytes().await.unwrap()).unwrap();
-    check(&dir.path().join(format!("case-{case}.pvd")), 121, Some(&zip));
+    check(&dir.path().join(format!("case-{case}.pvd")), &[121], Some(&zip));
     server.shutdown().await.unwrap();
 }

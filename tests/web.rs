@@ -272,6 +272,64 @@ const KNOT_PIXELS: &str = "const c = document.querySelector('#knot canvas'); if 
     let n = 0; for (let i = 0; i < px.length; i += 4) { if (Math.abs(px[i] - px[0]) + Math.abs(px[i + 1] - px[1]) + Math.abs(px[i + 2] - px[2]) > 30) n++; } \
     return n / (w * h);";
 
+/// Pixels of the 3D canvas in each rod's colour: blue (the first rod's,
+/// 0x2e7dd7) and orange (the second's, 0xd55e00), by their hue under the
+/// lights.
+const ROD_PIXELS: &str = "const c = document.querySelector('#knot canvas'); \
+    const gl = c.getContext('webgl2') || c.getContext('webgl'); const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight; \
+    const px = new Uint8Array(4 * w * h); gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px); \
+    let blue = 0, orange = 0; for (let i = 0; i < px.length; i += 4) { const [r, g, b] = [px[i], px[i + 1], px[i + 2]]; \
+      if (b > r + 60 && b > g) blue++; if (r > b + 60 && r > g + 30) orange++; } \
+    return [blue / (w * h), orange / (w * h)];";
+
+/// A bend's case page: the API's snapshots say which nodes are whose rod,
+/// and the 3D view draws the two rods in their two colours, with a legend.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_bends_rods_are_drawn_each_in_its_colour() {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => return missing(&why),
+    };
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, 1)).await;
+    let (url, c) = (server.url(), client());
+    let base = json!({"knot": "reef", "length": 0.4, "nodes": 121, "relax_time": 0.1, "pull_speed": 0.01,
+        "min_l_k_bar": 100.0});
+    let id = submit_sweep(&c, &url, &json!({ "base": base })).await;
+    let sweep = wait_sweep(&c, &url, id, Duration::from_secs(120), finished).await;
+    let case = case_ids(&sweep)[0];
+    let (_, snapshots) = get(&c, &format!("{url}/api/cases/{case}/snapshots")).await;
+    assert_eq!(
+        snapshots[0]["rods"],
+        json!([121, 121]),
+        "the stored snapshots keep the rods"
+    );
+    browser.open(&format!("{url}/#/cases/{case}")).await;
+    browser
+        .until(
+            "the 3D canvas",
+            "return document.querySelector('#knot canvas') !== null",
+            Duration::from_secs(20),
+        )
+        .await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let fractions = browser.js(ROD_PIXELS, json!([])).await;
+    let (blue, orange) = (fractions[0].as_f64().unwrap(), fractions[1].as_f64().unwrap());
+    assert!(
+        blue > 1e-3 && orange > 1e-3,
+        "blue {blue}, orange {orange} of the canvas"
+    );
+    let hint = browser
+        .js(
+            "return document.querySelector('#knot').parentElement.textContent",
+            json!([]),
+        )
+        .await;
+    assert!(hint.as_str().unwrap().contains("rod 2 orange"), "{hint}");
+    browser.screenshot("bend").await;
+    server.shutdown().await.unwrap();
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field_errors() {
     let browser = match Browser::start().await {

@@ -106,11 +106,14 @@ class QuasiStatic(Record):
     holds: bool
 
 class Snapshot(Record):
-    """A state of the knot kept for viewers; points: (K, 3) array (m)."""
+    """A state of the knot kept for viewers; points: (K, 3) array (m), its rods one after the other."""
     label: str
     l_k_bar: float
     points: np.ndarray
+    rods: list[int]
+    """Node count of each rod (one rod: [K]; a bend's two)."""
     contacts: list[dict[str, Any]]
+    def per_rod(self, key: str = "points") -> list[np.ndarray]: ...
 
 class Progress(NamedTuple):
     fraction: float
@@ -159,7 +162,7 @@ def run(
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,
-    initial_shape: ArrayLike | None = None,
+    initial_shape: ArrayLike | Mapping[str, Any] | None = None,
     # Rod and material
     h: float = 1.6e-3,
     length: float = 1.0,
@@ -233,8 +236,11 @@ def run(
           long (within 1 %), every node between the ends along the line joining them (the clamps hold the
           first and last points), no two non-neighbouring segments closer than 2h by more than 1 % (strands
           pressed together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the
-          knot chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits). Range: null or K =
-          nodes points [x, y, z]. null: the builder's knot. Default: null.
+          knot chosen (knot, n, braid_word). A bend's two rods: {"rods": [{"points": [...], "start": "pulled",
+          "finish": "free"}, {...}]}, each rod `length` long with K points and one end pulled, the other free
+          (its tail), no two segments closer than 2h by more than 1 % (docs/API.md, "Start shapes"). Mind the
+          request body limit (GET /api/limits). Range: null or K = nodes points [x, y, z], or {"rods": [...]}
+          (a bend's two). null: the builder's knot. Default: null.
 
     Rod and material:
       h (m): Rod radius h, from L/16000 (the knot builder's edges of at most 4h within 4001 nodes) to below
@@ -361,7 +367,7 @@ def validate(
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,
-    initial_shape: ArrayLike | None = None,
+    initial_shape: ArrayLike | Mapping[str, Any] | None = None,
     # Rod and material
     h: float = 1.6e-3,
     length: float = 1.0,

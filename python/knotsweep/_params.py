@@ -43,7 +43,7 @@ class Parameter(NamedTuple):
             "float": "float",
             "vector": "Sequence[float]",
             "flag": "bool",
-            "points": "ArrayLike",
+            "points": "ArrayLike | Mapping[str, Any]",
             "program": "Sequence[Mapping[str, Mapping[str, Any]]]",
             "text": "str",
         }.get(self.kind)

@@ -72,8 +72,14 @@ class QuasiStatic(Record):
 
 class Snapshot(Record):
     """A state of the knot kept for viewers: ``label``, ``l_k_bar``, ``points`` (a (K, 3)
-    numpy array, m), the other per-node quantities the solver records (numpy
-    arrays) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``, ...)."""
+    numpy array, m; a bend's rods one after the other), ``rods`` (each rod's node
+    count: ``[K]`` for one rod), the other per-node quantities the solver records
+    (numpy arrays) and ``contacts`` (loaded contacts: ``a``, ``b``, ``force``, ...)."""
+
+    def per_rod(self, key: str = "points") -> list[np.ndarray]:
+        """A per-node array (``points``, ``curvature``, ``twist_rate``,
+        ``velocity``) split into one array per rod."""
+        return np.split(self[key], np.cumsum(self.rods)[:-1])
 
 
 class Progress(NamedTuple):
@@ -160,13 +166,15 @@ class Result:
 
 
 def _snapshot(snapshot: dict) -> Snapshot:
-    """A report's snapshot with its per-node lists (points, and whatever else
-    the solver records per node) as numpy arrays."""
+    """A report's (or the service's) snapshot with its per-node lists (points,
+    and whatever else the solver records per node) as numpy arrays and
+    ``rods`` its rods' node counts (``[K]`` for one rod)."""
     out = Snapshot(snapshot)
     for key, value in snapshot.items():
-        if key != "contacts" and isinstance(value, list):
+        if key not in ("contacts", "rods") and isinstance(value, list):
             out[key] = np.asarray(value, dtype=float)
     out["points"] = np.asarray(snapshot["points"], dtype=float).reshape(-1, 3)
+    out["rods"] = [int(n) for n in snapshot.get("rods") or [len(out["points"])]]
     return out
 
 

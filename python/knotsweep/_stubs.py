@@ -123,11 +123,14 @@ class QuasiStatic(Record):
     holds: bool
 
 class Snapshot(Record):
-    """A state of the knot kept for viewers; points: (K, 3) array (m)."""
+    """A state of the knot kept for viewers; points: (K, 3) array (m), its rods one after the other."""
     label: str
     l_k_bar: float
     points: np.ndarray
+    rods: list[int]
+    """Node count of each rod (one rod: [K]; a bend's two)."""
     contacts: list[dict[str, Any]]
+    def per_rod(self, key: str = "points") -> list[np.ndarray]: ...
 
 class Progress(NamedTuple):
     fraction: float

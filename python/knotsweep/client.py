@@ -178,10 +178,12 @@ class Client:
 
     def snapshots(self, case_id: int) -> list[dict]:
         """A finished case's snapshots (the knot's states kept for viewers), each
-        ``points`` a (K, 3) numpy array."""
+        ``points`` a (K, 3) numpy array (a bend's rods one after the other) and
+        ``rods`` its rods' node counts (``[K]`` for one rod)."""
         snapshots = self._get(f"/api/cases/{case_id}/snapshots").json()
         for s in snapshots:
             s["points"] = np.asarray(s["points"], dtype=float).reshape(-1, 3)
+            s["rods"] = [int(n) for n in s.get("rods") or [len(s["points"])]]
         return snapshots
 
     def fit(

@@ -204,3 +204,35 @@ def test_tighten_then_loosen_reports_each_stage():
     assert r.hysteresis is None or r.hysteresis.width == pytest.approx(
         r.hysteresis.flip_back_l_k_bar - r.hysteresis.inversion_l_k_bar)
     assert r.quasi_static is None or isinstance(r.quasi_static.holds, bool)
+
+
+def test_a_snapshot_splits_per_rod():
+    """A bend's snapshot lists its rods one after the other; ``rods`` gives
+    their node counts and ``per_rod`` splits any per-node array by them; one
+    rod is ``[K]``."""
+    from knotsweep._run import _snapshot
+
+    shot = {"label": "relaxed", "l_k_bar": 150.0, "points": [[i, 0, 0] for i in range(5)],
+            "curvature": [0.0, 1.0, 2.0, 3.0, 4.0], "contacts": []}
+    bend = _snapshot({**shot, "rods": [2, 3]})
+    assert bend.rods == [2, 3]
+    first, second = bend.per_rod()
+    assert first.shape == (2, 3) and second.shape == (3, 3) and second[0, 0] == 2.0
+    assert bend.per_rod("curvature")[1].tolist() == [2.0, 3.0, 4.0]
+    one = _snapshot(shot)
+    assert one.rods == [5] and len(one.per_rod()) == 1
+
+
+def test_a_bends_relaxed_snapshot_starts_a_case_again():
+    """A tiny reef knot's relaxed snapshot, split per rod, is a start shape of
+    two rods (standing ends pulled, tails free); one rod alone is refused,
+    naming the key."""
+    tiny = dict(knot="reef", length=0.4, nodes=121, relax_time=0.1, pull_speed=0.01, min_l_k_bar=100.0)
+    r = knotsweep.run(**tiny)
+    assert r.status == "completed", r.reason
+    relaxed = next(s for s in r.snapshots if s.label == "relaxed")
+    assert relaxed.rods == [121, 121]
+    rods = [{"points": p, "start": "pulled", "finish": "free"} for p in relaxed.per_rod()]
+    assert len(knotsweep.validate(**tiny, initial_shape={"rods": rods})["initial_shape"]["rods"]) == 2
+    with pytest.raises(ValueError, match=r"initial_shape\.rods"):
+        knotsweep.validate(**tiny, initial_shape={"rods": rods[:1]})

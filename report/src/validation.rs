@@ -627,7 +627,7 @@ mod tests {
     #[test]
     fn a_start_shape_is_named_by_its_file() {
         let p = CaseParams {
-            initial_shape: Some(vec![[0.0, 0.0, 0.0]; 301]),
+            initial_shape: Some(vec![[0.0, 0.0, 0.0]; 301].into()),
             ..CaseParams::default()
         };
         assert_eq!(

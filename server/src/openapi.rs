@@ -18,8 +18,10 @@ fn param_schema(name: &str, default: &Value) -> Schema {
     let parameter = PARAMETERS.iter().find(|p| p.name == name);
     let integer = parameter.is_some_and(|p| matches!(p.range, Range::Integers(..)));
     let text = parameter.is_some_and(|p| p.range == Range::BraidWord);
+    let shape = parameter.is_some_and(|p| p.range == Range::Points);
     let ty = match default {
         Value::Null if text => SchemaType::from_iter([Type::String, Type::Null]),
+        Value::Null if shape => SchemaType::from_iter([Type::Array, Type::Object, Type::Null]),
         Value::Number(n) if n.is_u64() || n.is_i64() => SchemaType::Type(Type::Integer),
         Value::Number(_) => SchemaType::Type(Type::Number),
         Value::Null if integer => SchemaType::from_iter([Type::Integer, Type::Null]),

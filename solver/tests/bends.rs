@@ -178,7 +178,7 @@ fn bend_cases_are_checked_naming_the_field() {
     );
     assert_eq!(
         field(CaseParams {
-            initial_shape: Some(vec![[0.0; 3]; 3]),
+            initial_shape: Some(vec![[0.0; 3]; 3].into()),
             ..reef.clone()
         }),
         "initial_shape"

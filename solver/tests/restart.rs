@@ -21,7 +21,7 @@ fn a_relaxed_snapshot_starts_a_case_again() {
         .find(|s| s.label == solver::snapshot::SnapshotLabel::Relaxed)
         .expect("a relaxed snapshot");
     let again = CaseParams {
-        initial_shape: Some(relaxed.points.clone()),
+        initial_shape: Some(relaxed.points.clone().into()),
         ..params
     };
     if let Err(errors) = again.validated() {

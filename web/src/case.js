@@ -34,6 +34,8 @@ export async function casePage(main, id) {
   // The snapshot at each event is marked; the slider starts at the first event's.
   const about = (f) => labels[f.label] || { description: f.label, event: null, at_event: false };
   const firstEvent = events[0];
+  // A hitch's rigid cylinder, where the result gives one.
+  const cylinder = (r && ((r.summary && r.summary.cylinder) || r.cylinder)) || null;
   const invIndex = snapshots.findIndex((f) => about(f).at_event && (!firstEvent || about(f).event === firstEvent.kind));
   $("#case").innerHTML = `
     <p><span class="status s-${esc(c.status)}">${esc(c.status)}</span>
@@ -56,7 +58,7 @@ export async function casePage(main, id) {
         <button type="button" id="reset">Reset view</button>
       </div>
       <p class="hint">Drag to rotate, scroll to zoom, right-drag to pan. ${snapshots.length} stored snapshots${snapshots.some((f) => about(f).at_event) ? "; each event's is marked ★" : ""}.
-        Beads mark the loaded contacts, coloured from blue (weakest) to red (strongest force of the snapshot).</p>
+        Beads mark the loaded contacts, coloured from blue (weakest) to red (strongest force of the snapshot).${rodLegend(snapshots)}${cylinder ? " The grey cylinder is the hitch's rigid cylinder." : ""}</p>
     </section>
     <section aria-labelledby="curves-h"><h2 id="curves-h">Loading curves</h2>
       <p class="hint">Solid: tightening; dashed: loosening; dotted: holding or rotating. ● an inversion, ◇ a flip back.</p>
@@ -95,11 +97,12 @@ export async function casePage(main, id) {
     return;
   }
   const view = new KnotView($("#knot"), p.h);
+  view.setCylinder(cylinder);
   const slider = $("#snapshot");
   const show = () => {
     const fr = snapshots[Number(slider.value)];
     const contacts = fr.contacts || [];
-    view.show(fr.points, contacts);
+    view.show(fr.points, contacts, fr.rods || []);
     const largest = contacts.length ? Math.max(...contacts.map((c) => c.force)) : 0;
     $("#snapshot-label").textContent = `${Number(slider.value) + 1}/${snapshots.length}: ${LK} ${fmt(fr.l_k_bar)} (${about(fr).description})${about(fr).at_event ? " ★" : ""}` +
       ` · ${contacts.length} loaded contacts${contacts.length ? `, largest force ${largest.toExponential(2)} N` : ""}`;
@@ -109,6 +112,14 @@ export async function casePage(main, id) {
   slider.oninput = show;
   $("#reset").onclick = () => view.reset();
   show();
+}
+
+/** The rods' colours in words, for a snapshot of several rods (a bend). */
+const ROD_NAMES = ["blue", "orange", "green", "pink"];
+function rodLegend(snapshots) {
+  const rods = Math.max(0, ...snapshots.map((f) => (f.rods || []).length));
+  if (rods < 2) return "";
+  return ` Each rod in its own colour: ${Array.from({ length: rods }, (_, r) => `rod ${r + 1} <span class="rod-${r % ROD_NAMES.length}">${ROD_NAMES[r % ROD_NAMES.length]}</span>`).join(", ")}.`;
 }
 
 /** The energies of eq. (6) over EI / h against time: braid and loop, and stretching, bending and twisting. */

@@ -1,18 +1,20 @@
-//! A case's snapshots for ParaView: per snapshot two VTK XML PolyData files,
-//! the centre line and its loaded contacts, and a `.pvd` collection that
-//! orders them in time, each snapshot's two files its parts 0 and 1 (ParaView opens
-//! the `.pvd` as one multiblock data set per time).
+//! A case's snapshots for ParaView: per snapshot VTK XML PolyData files,
+//! a centre line per rod and the loaded contacts, and a `.pvd` collection
+//! that orders them in time, each snapshot's files its parts (ParaView opens
+//! the `.pvd` as one multiblock data set per time, a block per part).
 //!
-//! Centre line (`centreline_NNN.vtp`): the nodes (m) joined by one polyline,
-//! with point data `radius` (h, m), `twist_rate` and `curvature` (1/m) and
-//! `velocity` (m/s). Contacts (`contacts_NNN.vtp`): a vertex midway between
-//! the two closest points of each loaded contact, with `normal_force` and
-//! `friction_force` (N, on the first segment's rod) and `stick` (1: inside
-//! the friction cone, 0: slipping). Both carry field data `TimeValue` (s)
-//! and `l_k_bar`.
+//! Centre line of a one-rod knot (`centreline_NNN.vtp`, part 0), or of each
+//! rod of a bend (`rod_R_NNN.vtp`, part R, block `rod_R`): the rod's nodes
+//! (m) joined by one polyline, with point data `radius` (h, m), `twist_rate`
+//! and `curvature` (1/m) and `velocity` (m/s). Contacts (`contacts_NNN.vtp`,
+//! the last part): a vertex midway between the two closest points of each
+//! loaded contact, with `normal_force` and `friction_force` (N, on the first
+//! segment's rod) and `stick` (1: inside the friction cone, 0: slipping).
+//! Each carries field data `TimeValue` (s) and `l_k_bar`.
 mod xml;
 
 use solver::protocol::Snapshot;
+use std::ops::Range;
 use xml::{Array, Cells, DataSet, Values};
 
 /// A file to write: its path relative to the output directory (`/`
@@ -23,17 +25,30 @@ pub struct VtkFile {
 }
 
 /// The files of `snapshots` of a case of rod radius `radius` (m), named after
-/// `name`: `{name}.pvd` and, in time order, `{name}/centreline_NNN.vtp` and
-/// `{name}/contacts_NNN.vtp`.
+/// `name`: `{name}.pvd` and, in time order, `{name}/centreline_NNN.vtp` (or
+/// per rod of a bend `{name}/rod_R_NNN.vtp`) and `{name}/contacts_NNN.vtp`.
 pub fn case_files(name: &str, radius: f64, snapshots: &[Snapshot]) -> Vec<VtkFile> {
     let ordered = in_time(snapshots);
-    let mut files = Vec::with_capacity(1 + 2 * ordered.len());
+    let rods = ordered
+        .iter()
+        .map(|(_, f)| f.rods.len())
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let parts: Vec<String> = match rods {
+        1 => vec!["centreline".to_string()],
+        _ => (0..rods).map(|r| format!("rod_{r}")).collect(),
+    }
+    .into_iter()
+    .chain(["contacts".to_string()])
+    .collect();
+    let mut files = Vec::with_capacity(1 + parts.len() * ordered.len());
     for (k, (time, f)) in ordered.iter().enumerate() {
-        for (part, text) in [centreline(f, radius, *time), contacts(f, *time)]
+        let lines = node_ranges(f)
             .into_iter()
-            .enumerate()
-        {
-            let path = format!("{name}/{}_{k:03}.vtp", PARTS[part]);
+            .map(|nodes| centreline(f, nodes, radius, *time));
+        for (part, text) in lines.chain([contacts(f, *time)]).enumerate() {
+            let path = format!("{name}/{}_{k:03}.vtp", parts[part]);
             files.push(VtkFile { path, text });
         }
     }
@@ -44,12 +59,15 @@ pub fn case_files(name: &str, radius: f64, snapshots: &[Snapshot]) -> Vec<VtkFil
     let sets: Vec<DataSet> = files
         .iter()
         .enumerate()
-        .map(|(i, file)| DataSet {
-            timestep: ordered[i / 2].0,
-            part: i % 2,
-            name: PARTS[i % 2],
-            file: &file.path,
-            comment: if i % 2 == 0 { &comments[i / 2] } else { "" },
+        .map(|(i, file)| {
+            let (k, part) = (i / parts.len(), i % parts.len());
+            DataSet {
+                timestep: ordered[k].0,
+                part,
+                name: &parts[part],
+                file: &file.path,
+                comment: if part == 0 { &comments[k] } else { "" },
+            }
         })
         .collect();
     let pvd = VtkFile {
@@ -59,8 +77,19 @@ pub fn case_files(name: &str, radius: f64, snapshots: &[Snapshot]) -> Vec<VtkFil
     std::iter::once(pvd).chain(files).collect()
 }
 
-/// The names of a snapshot's two files, parts 0 and 1 of the collection.
-const PARTS: [&str; 2] = ["centreline", "contacts"];
+/// The nodes of each rod of `f` in its `points`: all of them for one rod.
+fn node_ranges(f: &Snapshot) -> Vec<Range<usize>> {
+    if f.rods.is_empty() {
+        return std::iter::once(0..f.points.len()).collect();
+    }
+    let mut start = 0;
+    (f.rods.iter())
+        .map(|&n| {
+            start += n;
+            start - n..start
+        })
+        .collect()
+}
 
 /// The snapshots in time order with their times (s), a snapshot stored twice
 /// (one sample under two labels) once. Snapshots stored before their time was
@@ -88,25 +117,29 @@ fn field_data<'a>(time: &'a [f64; 1], l_k_bar: &'a [f64; 1]) -> [Array<'a>; 2] {
     ]
 }
 
-/// The centre line of `f`; per-node fields it lacks (a snapshot stored before
-/// they were recorded) are left out.
-fn centreline(f: &Snapshot, radius: f64, time: f64) -> String {
-    let n = f.points.len();
+/// The centre line of the rod of `f` whose nodes are `nodes`; per-node
+/// fields it lacks (a snapshot stored before they were recorded) are left
+/// out.
+fn centreline(f: &Snapshot, nodes: Range<usize>, radius: f64, time: f64) -> String {
+    let n = nodes.len();
     let radii = vec![radius; n];
-    let velocity: Vec<f32> = f.velocity.iter().flatten().copied().collect();
+    let of = |len: usize| (len == f.points.len()).then(|| nodes.clone());
     let mut point_data = vec![Array::scalars("radius", Values::F64(&radii))];
-    if f.curvature.len() == n {
-        point_data.insert(0, Array::scalars("curvature", Values::F32(&f.curvature)));
+    if let Some(r) = of(f.curvature.len()) {
+        point_data.insert(0, Array::scalars("curvature", Values::F32(&f.curvature[r])));
     }
-    if f.twist_rate.len() == n {
-        point_data.push(Array::scalars("twist_rate", Values::F32(&f.twist_rate)));
+    if let Some(r) = of(f.twist_rate.len()) {
+        point_data.push(Array::scalars("twist_rate", Values::F32(&f.twist_rate[r])));
     }
-    if f.velocity.len() == n {
+    let velocity: Vec<f32> = of(f.velocity.len())
+        .map(|r| f.velocity[r].iter().flatten().copied().collect())
+        .unwrap_or_default();
+    if !velocity.is_empty() {
         point_data.push(Array::vectors("velocity", Values::F32(&velocity)));
     }
     let (t, l) = ([time], [f.l_k_bar]);
     let fields = field_data(&t, &l);
-    xml::poly_data(&f.points, Cells::Polyline, &point_data, &fields)
+    xml::poly_data(&f.points[nodes], Cells::Polyline, &point_data, &fields)
 }
 
 /// The loaded contacts of `f`.
@@ -231,6 +264,43 @@ mod tests {
         assert_eq!(get("normal_force"), &vec![0.0, 0.0, 1.0]);
         assert_eq!(get("friction_force"), &vec![0.05, 0.0, 0.0]);
         assert_eq!(get("stick"), &vec![1.0]);
+    }
+
+    /// A bend's snapshot: a block per rod (its own nodes and fields), then
+    /// the contacts.
+    #[test]
+    fn a_bend_gets_a_block_per_rod() {
+        let mut bend = snapshot("relaxed", 1.0, 160.0, 7);
+        bend.rods = vec![3, 4];
+        bend.curvature = (0..7).map(|i| i as f32).collect();
+        let files = case_files("bend", 1e-3, &[bend]);
+        let paths: Vec<&str> = files.iter().map(|f| f.path.as_str()).collect();
+        assert_eq!(
+            paths,
+            [
+                "bend.pvd",
+                "bend/rod_0_000.vtp",
+                "bend/rod_1_000.vtp",
+                "bend/contacts_000.vtp"
+            ]
+        );
+        let pvd = roxmltree::Document::parse(&files[0].text).unwrap();
+        let sets: Vec<(&str, &str)> = pvd
+            .descendants()
+            .filter(|e| e.has_tag_name("DataSet"))
+            .map(|e| (e.attribute("part").unwrap(), e.attribute("name").unwrap()))
+            .collect();
+        assert_eq!(sets, [("0", "rod_0"), ("1", "rod_1"), ("2", "contacts")]);
+        for (file, first, n) in [(1, 0.0, 3), (2, 3.0, 4)] {
+            let text = &files[file].text;
+            assert_eq!(piece_attribute(text, "NumberOfPoints"), n);
+            assert_eq!(piece_attribute(text, "NumberOfLines"), 1);
+            let a = arrays(text);
+            let get = |name: &str| &a.iter().find(|(m, _)| m == name).expect(name).1;
+            assert_eq!(get("curvature")[0], first);
+            assert_eq!(get("Points")[0], first * 1e-2);
+            assert_eq!(get("velocity").len(), 3 * n);
+        }
     }
 
     #[test]

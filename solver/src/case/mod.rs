@@ -7,6 +7,7 @@ mod materials;
 mod params;
 mod partial;
 mod scales;
+mod shape;
 mod table;
 
 pub use crate::contact::{Candidates, ContactSolve, FrictionLaw, Geometry};
@@ -21,6 +22,7 @@ pub use scales::{
     reference_pull_rate,
 };
 use serde::{Deserialize, Serialize};
+pub use shape::{EndRole, InitialShape, ShapeRod};
 pub use table::{Bound, Group, Parameter, Range};
 
 /// Revision of the physics: raised whenever a change to the model or its
@@ -295,7 +297,7 @@ impl CaseParams {
     pub fn node_count(&self) -> usize {
         match (self.nodes, &self.initial_shape) {
             (Some(k), _) => k,
-            (None, Some(points)) => points.len(),
+            (None, Some(shape)) => shape.nodes(),
             (None, None) => default_nodes(self.length, self.h, self.mu, MAX_NODES),
         }
     }
@@ -445,7 +447,7 @@ mod tests {
         let built = CaseParams::default().start_shape().unwrap();
         let points: Vec<[f64; 3]> = built.points().iter().map(|p| [p.x, p.y, p.z]).collect();
         let with = |pts: Vec<[f64; 3]>| CaseParams {
-            initial_shape: Some(pts),
+            initial_shape: Some(pts.into()),
             ..CaseParams::default()
         };
         let ok = with(points.clone());

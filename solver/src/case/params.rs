@@ -2,11 +2,11 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FieldError, FrictionLaw, Geometry, KnotKind, LoadStage, MAX_NODES,
-    MIN_RADIUS_DIVISOR, Protocol,
+    Candidates, ContactSolve, FieldError, FrictionLaw, Geometry, InitialShape, KnotKind, LoadStage,
+    MAX_NODES, MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{
-    self, BendSpec, BraidSpec, BraidWord, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
+    BendSpec, BraidSpec, BraidWord, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
     StartShape,
 };
 use serde::{Deserialize, Serialize};
@@ -80,8 +80,8 @@ pub struct CaseParams {
     pub stop_after_inversion: Option<f64>,
     /// Stop above this F bar.
     pub max_force_bar: Option<f64>,
-    /// The user's start shape (m), checked by [`crate::knot::checked_start`].
-    pub initial_shape: Option<Vec<[f64; 3]>>,
+    /// The user's start shape (m), checked by [`InitialShape::checked`].
+    pub initial_shape: Option<InitialShape>,
     /// The loading program; `None`: one tightening ([`super::default_program`]).
     pub loading: Option<Vec<LoadStage>>,
 }
@@ -583,7 +583,10 @@ pub const PARAMETERS: &[Parameter] = &[
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
               points), no two non-neighbouring segments closer than 2h by more than 1 % (strands pressed \
               together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the knot \
-              chosen (knot, n, braid_word). Mind the request body limit (GET /api/limits).",
+              chosen (knot, n, braid_word). A bend's two rods: {\"rods\": [{\"points\": [...], \"start\": \
+              \"pulled\", \"finish\": \"free\"}, {...}]}, each rod `length` long with K points and one end \
+              pulled, the other free (its tail), no two segments closer than 2h by more than 1 % (docs/API.md, \
+              \"Start shapes\"). Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
     Parameter {
@@ -656,27 +659,14 @@ impl CaseParams {
     }
 
     /// The shape the case starts from: `initial_shape`, checked
-    /// ([`knot::checked_start`]), or the knot builder's ([`knot::build`]
+    /// ([`InitialShape::checked`]), or the knot builder's ([`crate::knot::build`]
     /// itself, so that a case accepted by [`CaseParams::validate`] can always
     /// start); a failure names the parameter to change.
     pub(super) fn start_shape(&self) -> Result<StartShape, FieldError> {
         let knot = self.knot()?;
-        match (&self.initial_shape, knot.alexander()) {
-            (Some(points), Some(alexander)) => {
-                let rod = (self.length, self.node_count(), self.h);
-                knot::checked_start(points, rod, &knot.name(), &alexander).map_err(|reason| FieldError {
-                    field: "initial_shape".to_string(),
-                    reason,
-                })
-            }
-            (Some(_), None) => Err(FieldError {
-                field: "initial_shape".to_string(),
-                reason: format!(
-                    "initial_shape gives one rod; {} ties two, built by the solver: leave it out",
-                    knot.name()
-                ),
-            }),
-            (None, _) => knot.tie().map_err(|e| self.knot_error(e)),
+        match &self.initial_shape {
+            Some(shape) => shape.checked(&knot, (self.length, self.node_count(), self.h)),
+            None => knot.tie().map_err(|e| self.knot_error(e)),
         }
     }
 

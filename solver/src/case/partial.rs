@@ -17,7 +17,7 @@ pub fn param_names() -> Vec<String> {
 /// in the words of the table ([`Parameter::expected`](super::Parameter::expected)):
 /// `must be a whole number in 1..=8, got "three"`. The range is not checked
 /// here; a loading program's fault is its parser's to tell (which stage,
-/// which key).
+/// which key), as is a start shape's of rods (which key).
 ///
 /// ```
 /// use serde_json::json;
@@ -32,6 +32,7 @@ pub fn type_error(name: &str, value: &Value) -> Option<String> {
     object.insert(name.to_string(), value.clone());
     let error = serde_json::from_value::<CaseParams>(Value::Object(object)).err()?;
     Some(match PARAMETERS.iter().find(|p| p.name == name) {
+        Some(p) if p.range == Range::Points && value.is_object() => error.to_string(),
         Some(p) if p.range != Range::Program => format!("must be {}, got {}", p.expected(), shown(value)),
         _ => error.to_string(),
     })

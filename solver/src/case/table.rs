@@ -83,8 +83,8 @@ pub enum Range {
     Flag,
     /// One of these words.
     Words(&'static [&'static str]),
-    /// K = `nodes` points `[x, y, z]`, checked as a start shape
-    /// ([`crate::knot::checked_start`]).
+    /// K = `nodes` points `[x, y, z]`, or rods with their ends' roles,
+    /// checked as a start shape ([`super::InitialShape::checked`]).
     Points,
     /// A loading program ([`super::LoadStage`]), checked against the start
     /// shape.
@@ -125,7 +125,7 @@ impl Parameter {
                 .map(|w| format!("\"{w}\""))
                 .collect::<Vec<_>>()
                 .join(" or "),
-            Range::Points => "K = nodes points [x, y, z]".to_string(),
+            Range::Points => "K = nodes points [x, y, z], or {\"rods\": [...]} (a bend's two)".to_string(),
             Range::BraidWord => {
                 "a braid word such as \"s1 s2^-1 s1 s2^-1\" (generators s1 ... s4)".to_string()
             }

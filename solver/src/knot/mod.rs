@@ -35,7 +35,7 @@ pub use overhand::{
     MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
 pub use polyline::closest_approach;
-pub use start::checked_start;
+pub use start::{check_rods_clearance, checked_rod, checked_start};
 pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
     knot_determinant,

@@ -191,6 +191,14 @@ mod tests {
         }
     }
 
+    #[tokio::test]
+    async fn bend_snapshots_on_postgres() {
+        if let Some(db) = testing::postgres("bend").await {
+            testing::bend_snapshots(&db.store).await;
+            db.drop_database().await;
+        }
+    }
+
     /// A database written before the packed results, opened by the store
     /// (which migrates it): the old rows are served as stored.
     #[tokio::test]

@@ -150,6 +150,12 @@ mod tests {
         testing::packed_results(&store).await;
     }
 
+    #[tokio::test]
+    async fn bend_snapshots_on_sqlite() {
+        let (store, _dir) = testing::sqlite().await;
+        testing::bend_snapshots(&store).await;
+    }
+
     /// A file written before the packed results, opened by the store (which
     /// rebuilds its results table): the old rows are served as stored.
     #[tokio::test]

@@ -616,6 +616,63 @@ pub(crate) async fn packed_results(store: &dyn Store) {
     }
 }
 
+/// A bend's snapshots stored and read back: the reef knot's two rods as
+/// built, one after the other, keep which nodes are whose (`rods`), and the
+/// centre lines come back within the codec's bounds.
+pub(crate) async fn bend_snapshots(store: &dyn Store) {
+    let params = CaseParams {
+        knot: solver::case::KnotKind::Reef,
+        ..CaseParams::default()
+    };
+    let built = params.validated().expect("the reef knot builds");
+    let rods = &built.start().rods;
+    let points: Vec<[f64; 3]> = rods.iter().flatten().map(|p| [p.x, p.y, p.z]).collect();
+    let counts: Vec<usize> = rods.iter().map(Vec::len).collect();
+    create(
+        store,
+        NewSweep {
+            cases: vec![NewCase::new(params)],
+            ..sweep(&[])
+        },
+    )
+    .await;
+    let claim = store.claim("w1", LEASE).await.unwrap().expect("the reef case");
+    let shot = solver::snapshot::Snapshot {
+        points: points.clone(),
+        twist_rate: Vec::new(),
+        curvature: Vec::new(),
+        velocity: Vec::new(),
+        rods: counts.clone(),
+        ..snapshot(SnapshotLabel::Relaxed, 150.0)
+    };
+    let done = CaseReport {
+        snapshots: vec![shot.clone(), shot],
+        ..report(claim.params.clone(), Status::Completed)
+    };
+    assert!(store.complete(&claim.lease, &done).await.unwrap());
+    let back = store
+        .case_snapshots(claim.lease.case_id)
+        .await
+        .unwrap()
+        .expect("snapshots");
+    assert_eq!(back.len(), 2);
+    for s in &back {
+        assert_eq!(s.rods, counts, "two rods of {} nodes", counts[0]);
+        let mut nodes = s.points.iter();
+        for rod in rods {
+            for (p, q) in rod.iter().zip(nodes.by_ref()) {
+                for k in 0..3 {
+                    assert!(
+                        (p[k] - q[k]).abs() <= 2f64.powi(-24) * p[k].abs() + 1e-15,
+                        "{p:?} vs {q:?}"
+                    );
+                }
+            }
+        }
+        assert!(nodes.next().is_none());
+    }
+}
+
 /// The migrations a database stored before the packed results had run.
 pub(crate) fn before_packing(mut migrator: sqlx::migrate::Migrator) -> sqlx::migrate::Migrator {
     const PACKED: i64 = 20261126000000;

@@ -9,6 +9,10 @@
 //! | `twist_rate`, `curvature`, `velocity` | f16 of each value over the snapshot's largest magnitude of the field (an f32) | 2^-11 of the value plus 2^-24 of that largest magnitude |
 //! | `contacts`: `a`, `b`, `force`, `normal_force`, `friction_force` | f32 | 2^-24 of the value (f32 rounding) |
 //! | `contacts`: `stick` | a byte | exact |
+//! | `rods` (node counts per rod) | u32 | exact |
+//!
+//! Format 1, written before `rods` was stored, reads back with `rods` empty
+//! (one rod).
 //!
 //! The per-node fields are single precision in the report already; f16 keeps
 //! what a viewer's colour map shows.
@@ -18,7 +22,9 @@ use half::f16;
 use solver::snapshot::{Snapshot, SnapshotContact, SnapshotLabel};
 
 /// The packed form's format byte.
-const FORMAT: u8 = 1;
+const FORMAT: u8 = 2;
+/// The format written before `rods` was stored: read, never written.
+const FORMAT_WITHOUT_RODS: u8 = 1;
 
 /// The snapshots packed.
 pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
@@ -26,16 +32,18 @@ pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
     p.u32s([snapshots.len() as u32]);
     let labels: Vec<String> = snapshots.iter().map(|s| s.label.to_string()).collect();
     p.u32s(labels.iter().map(|l| l.len() as u32));
-    let lengths: [fn(&Snapshot) -> usize; 5] = [
+    let lengths: [fn(&Snapshot) -> usize; 6] = [
         |s| s.points.len(),
         |s| s.twist_rate.len(),
         |s| s.curvature.len(),
         |s| s.velocity.len(),
         |s| s.contacts.len(),
+        |s| s.rods.len(),
     ];
     for length in lengths {
         p.u32s(snapshots.iter().map(|s| length(s) as u32));
     }
+    p.u32s(snapshots.iter().flat_map(|s| &s.rods).map(|&nodes| nodes as u32));
     for label in &labels {
         p.bytes(label.as_bytes());
     }
@@ -73,14 +81,20 @@ pub fn pack_snapshots(snapshots: &[Snapshot]) -> Vec<u8> {
 }
 
 /// The snapshots [`pack_snapshots`] packed, within the bounds of the
-/// module's table.
+/// module's table (format 1's with `rods` empty).
 pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
-    let mut u = Unpacker::new(packed, FORMAT)?;
+    let format = match packed.first() {
+        Some(&FORMAT_WITHOUT_RODS) => FORMAT_WITHOUT_RODS,
+        _ => FORMAT,
+    };
+    let mut u = Unpacker::new(packed, format)?;
     let n = u.u32s(1)?[0] as usize;
+    let arrays = if format == FORMAT { 7 } else { 6 };
     let mut lengths = Vec::new();
-    for _ in 0..6 {
+    for _ in 0..arrays {
         lengths.push(u.u32s(n)?.into_iter().map(|l| l as usize).collect::<Vec<usize>>());
     }
+    lengths.resize(7, vec![0; n]);
     let [
         label_len,
         point_len,
@@ -88,7 +102,13 @@ pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
         curvature_len,
         velocity_len,
         contact_len,
-    ] = <[Vec<usize>; 6]>::try_from(lengths).expect("six arrays");
+        rod_len,
+    ] = <[Vec<usize>; 7]>::try_from(lengths).expect("seven arrays");
+    let total_rods = rod_len.iter().try_fold(0usize, |sum, &l| sum.checked_add(l));
+    let mut rods = u
+        .u32s(total_rods.ok_or(CodecError::Truncated)?)?
+        .into_iter()
+        .map(|r| r as usize);
     let mut labels = Vec::with_capacity(n);
     for &len in &label_len {
         let word = std::str::from_utf8(u.bytes(len)?).map_err(|_| CodecError::Label)?;
@@ -141,7 +161,7 @@ pub fn unpack_snapshots(packed: &[u8]) -> Result<Vec<Snapshot>, CodecError> {
                 curvature,
                 velocity,
                 contacts: contacts.by_ref().take(contact_len[i]).collect(),
-                rods: Vec::new(),
+                rods: rods.by_ref().take(rod_len[i]).collect(),
             },
         )
         .collect();
@@ -218,9 +238,10 @@ mod tests {
             )
     }
 
-    /// Snapshots of a rod of `nodes` nodes moving a little between them
-    /// (as a report's do), some with per-node fields left empty (as
-    /// snapshots stored before those fields were recorded).
+    /// Snapshots of `nodes` nodes moving a little between them (as a
+    /// report's do), one rod or two (a bend's, split at `cut`), some with
+    /// per-node fields left empty (as snapshots stored before those fields
+    /// were recorded).
     fn snapshots() -> impl Strategy<Value = Vec<Snapshot>> {
         (1usize..30).prop_flat_map(|nodes| {
             prop::collection::vec(
@@ -235,14 +256,27 @@ mod tests {
                     prop::collection::vec(magnitude(), nodes),
                     prop::collection::vec(prop::array::uniform3(magnitude()), nodes),
                     prop::collection::vec(contact(), 0..6),
+                    0..nodes,
                 ),
                 0..8,
             )
-            .prop_map(|shots| {
+            .prop_map(move |shots| {
                 let mut drift = 0.0;
                 (shots.into_iter())
                     .map(
-                        |(label, l_k_bar, time, base, moved, full, twist, curvature, velocity, contacts)| {
+                        |(
+                            label,
+                            l_k_bar,
+                            time,
+                            base,
+                            moved,
+                            full,
+                            twist,
+                            curvature,
+                            velocity,
+                            contacts,
+                            cut,
+                        )| {
                             drift += 1e-3;
                             let points = base
                                 .iter()
@@ -258,7 +292,11 @@ mod tests {
                                 curvature: if full { curvature } else { Vec::new() },
                                 velocity: if full { velocity } else { Vec::new() },
                                 contacts,
-                                rods: Vec::new(),
+                                rods: if cut == 0 {
+                                    Vec::new()
+                                } else {
+                                    vec![cut, nodes - cut]
+                                },
                             }
                         },
                     )
@@ -287,6 +325,7 @@ mod tests {
                 prop_assert_eq!(&s.label, &b.label);
                 prop_assert_eq!(s.l_k_bar.to_bits(), b.l_k_bar.to_bits());
                 prop_assert_eq!(s.time.to_bits(), b.time.to_bits());
+                prop_assert_eq!(&s.rods, &b.rods);
                 prop_assert_eq!(s.points.len(), b.points.len());
                 let reference = reference(&previous, s.points.len());
                 for ((x, y), r) in s.points.iter().zip(&b.points).zip(&reference) {
@@ -323,6 +362,47 @@ mod tests {
         }
     }
 
+    /// A value packed in format 1 (before `rods` was stored): one snapshot
+    /// of two nodes, no per-node fields and no contacts, array by array in
+    /// that format's order, reads back as one rod.
+    #[test]
+    fn format_1_reads_back_as_one_rod() {
+        let mut p = Packer::default();
+        p.u32s([1]);
+        for len in [7, 2, 0, 0, 0, 0] {
+            p.u32s([len]);
+        }
+        p.bytes(b"relaxed");
+        p.f64s([150.0]);
+        p.f64s([0.5]);
+        for k in 0..3 {
+            p.f32s_along([0.0, 0.25 * (k + 1) as f32]);
+        }
+        for _ in 0..3 {
+            p.f32s([1.0]);
+            p.f16s_along([]);
+        }
+        for _ in 0..13 {
+            p.f32s([]);
+        }
+        p.bytes(&[]);
+        let back = unpack_snapshots(&p.finish(FORMAT_WITHOUT_RODS)).unwrap();
+        assert_eq!(
+            back,
+            [Snapshot {
+                label: SnapshotLabel::Relaxed,
+                l_k_bar: 150.0,
+                time: 0.5,
+                points: vec![[0.0; 3], [0.25, 0.5, 0.75]],
+                twist_rate: Vec::new(),
+                curvature: Vec::new(),
+                velocity: Vec::new(),
+                contacts: Vec::new(),
+                rods: Vec::new(),
+            }]
+        );
+    }
+
     #[test]
     fn a_label_that_is_not_utf8_or_no_labels_word_is_an_error() {
         let shot = Snapshot {
@@ -340,7 +420,7 @@ mod tests {
         assert_eq!(unpack_snapshots(&good).unwrap(), [shot]);
         let mut p = Packer::default();
         p.u32s([1]);
-        for len in [2, 0, 0, 0, 0, 0] {
+        for len in [2, 0, 0, 0, 0, 0, 0] {
             p.u32s([len]);
         }
         p.bytes(&[0xc3, 0x28]);
@@ -351,7 +431,7 @@ mod tests {
         // A word that is no label's (the label's bytes are read first).
         let mut p = Packer::default();
         p.u32s([1]);
-        for len in [4, 0, 0, 0, 0, 0] {
+        for len in [4, 0, 0, 0, 0, 0, 0] {
             p.u32s([len]);
         }
         p.bytes(b"snap");

@@ -177,6 +177,10 @@ pub struct CaseReport {
     /// for a knot in one rod.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub holding_force_bar: Option<f64>,
+    /// A hitch's cylinder (centre, axis, radius, length; m), for viewers;
+    /// absent for a knot without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<crate::contact::Cylinder>,
     /// A bend's own measurements at each sample of `series`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bend_series: Vec<BendSample>,
@@ -224,6 +228,7 @@ impl CaseReport {
             quasi_static: None,
             tied: None,
             holding_force_bar: None,
+            cylinder: None,
             bend_series: Vec::new(),
         }
     }

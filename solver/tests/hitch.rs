@@ -33,9 +33,19 @@ fn the_clove_hitch_holds_more_with_more_friction() {
             .map(|(s, _)| s.f_bar)
             .fold(f64::NEG_INFINITY, f64::max);
         assert_eq!(force, free_largest, "mu {mu}");
+        let released = report
+            .bend_series
+            .iter()
+            .position(|b| b.tails_free)
+            .expect("the tail let go");
+        let last = report.series.len() - 1;
         println!(
-            "clove hitch mu {mu}: holding force {force:.5}, {}, {} steps",
+            "clove hitch mu {mu}: holding force {force:.5}, {} at l_k bar {:.2} ({} samples after the tail was let \
+             go at {:.2}), {} steps",
             if slipped { "slipped" } else { "held" },
+            report.series[last].l_k_bar,
+            last - released,
+            report.series[released].l_k_bar,
             report.stats.steps
         );
         holding.push((force, slipped));

@@ -12,7 +12,7 @@ use crate::knot::{self, Alexander, Clamp, StartShape};
 use crate::material::Material;
 use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World, WorldStepReport};
-use crate::rod::{End, Rod};
+use crate::rod::{End, Rod, node_dof};
 use crate::snapshot::{Snapshot, SnapshotLabel};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
@@ -33,6 +33,11 @@ pub(super) const PARTED: f64 = 0.5;
 /// along the pull, within reach of each other; a tied one's bights hold
 /// their bends.
 pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
+/// F bar of the constant load that holds a hitch's tail once it is let go
+/// (a fifth of the setting load): a free tail is flung off the cylinder by
+/// the turns' own bending as soon as it is let go (at mu 0.1 ... 0.5, R =
+/// 10 h), so the tail hangs a weight, as in a hitch's holding test.
+pub const HITCH_TAIL_FORCE_BAR: f64 = 0.2 * BEND_SET_FORCE_BAR;
 /// A hitch has slipped when its rod wraps the cylinder by less than this
 /// many turns: its tail has left the pinch under the diagonal and half a
 /// turn more has unwound (it starts with two turns and its ends' lines).
@@ -243,6 +248,9 @@ pub(super) struct Carried {
     /// Where a hitch's tail was held when it was let go: the far end of
     /// its l_k bar from then on.
     pub(super) tail_anchor: Option<Vector3<f64>>,
+    /// The load (N) on a hitch's tail end once it is let go
+    /// ([`HITCH_TAIL_FORCE_BAR`]).
+    pub(super) tail_load: Option<Vector3<f64>>,
     /// The loop's middle node, from the builder and then tracked from each
     /// sample's braid ends.
     pub(super) mid: usize,
@@ -305,6 +313,7 @@ impl<'a> Case<'a> {
             clamp_impulses: [0.0; 2],
             tails_held: start.is_bend() || start.is_hitch(),
             tail_anchor: None,
+            tail_load: None,
             mid: start.loop_middle,
             twist: Tracker::new(rod, report.writhe),
             history: VecDeque::with_capacity(SNAPSHOT_HISTORY),
@@ -365,8 +374,9 @@ impl<'a> Case<'a> {
     /// bend of elastic rods springs open when its tails are free; a knot
     /// tied by hand is set by pulling its four ends before its standing ends
     /// are loaded).
-    /// A hitch's tail is its second clamp: from then on its standing end
-    /// alone is pulled, against the cylinder.
+    /// A hitch's tail is its second clamp: from then on it hangs a weight
+    /// ([`HITCH_TAIL_FORCE_BAR`]) and its standing end alone is pulled,
+    /// against the cylinder.
     pub(super) fn release_tails(&mut self, f_bar: f64) {
         if !self.carried.tails_held || f_bar < BEND_SET_FORCE_BAR {
             return;
@@ -375,6 +385,8 @@ impl<'a> Case<'a> {
         let freed = match self.cylinder {
             Some(_) => {
                 self.carried.tail_anchor = Some(clamp_point(&self.world, &self.clamps[1]));
+                let weight = HITCH_TAIL_FORCE_BAR * force_unit(self.params);
+                self.carried.tail_load = Some(self.axis * weight);
                 vec![self.clamps[1]]
             }
             None => tails(&self.clamps).to_vec(),
@@ -394,6 +406,23 @@ impl<'a> Case<'a> {
             at,
             self.clock.elapsed,
         ));
+    }
+
+    /// Puts a hitch's tail load on its tail end, added to the sliding
+    /// exemption just written (`exempted`) or in place of the zero load.
+    fn hang_tail_load(&mut self, exempted: bool) {
+        let (Some(weight), tail) = (self.carried.tail_load, self.clamps[1]) else {
+            return;
+        };
+        self.world.set_load(tail.rod, |rod, load| {
+            let d = match tail.end {
+                End::Start => node_dof(0),
+                End::Finish => node_dof(rod.nodes() - 1),
+            };
+            for (i, f) in weight.iter().enumerate() {
+                load[d + i] = if exempted { load[d + i] + f } else { *f };
+            }
+        });
     }
 
     /// Moves clamp `c` at `v`, unless it has been let go (a hitch's tail).
@@ -565,6 +594,7 @@ impl<'a> Case<'a> {
                     .set_load(rod, |rod, load| sliding::exempt_sliding(rod, gamma, load));
             }
         }
+        self.hang_tail_load(phase.spares_sliding());
         let (step, dt) = match self.clock.advance(&mut self.world) {
             Ok(s) => (s.report, s.dt),
             Err(e) => return Err(Ending::new(Status::Diverged, format!("{e}; {STEP_HINT}"))),
@@ -605,6 +635,7 @@ impl<'a> Case<'a> {
             for rod in 0..self.world.rods.len() {
                 self.world.set_load(rod, |_, load| load.fill(0.0));
             }
+            self.hang_tail_load(false);
         }
         if self.params.adaptive_dt {
             self.clock.rescale(phase.dt_max(self.params.time_step()));

@@ -164,8 +164,9 @@ pub const PARAMETERS: &[Parameter] = &[
               before they part), with l_k bar = (2L - the pulled clamps' distance) / h. \"clove_hitch\" ties the rod \
               round a rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls \
               its two ends apart, away from the cylinder, until the hitch has set (F bar 0.025), lets the tail go \
-              and pulls the standing end until tight (max_force_bar, default 0.05) or until the rod slips round \
-              the cylinder (less than one and a half turns left on it): tied and holding_force_bar as for a bend, \
+              with a weight of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default \
+              0.05) or until the rod slips round the cylinder (less than one and a half turns left on it): tied and \
+              holding_force_bar as for a bend, \
               l_k bar = (L - the standing end's distance from where the tail was held) / h; the report carries \
               the cylinder.",
         value: UNCHECKED,

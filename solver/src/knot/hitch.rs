@@ -28,8 +28,8 @@
 //!
 //! The rod starts at its standing end, the first clamp, and ends at its
 //! tail, the second; both are pulled apart along `x`, away from the pole,
-//! until the hitch has set, and then the tail is let go
-//! (`protocol::runner`).
+//! until the hitch has set, and then the tail is let go with a weight on
+//! it and the standing end pulled on (`protocol::runner`).
 use super::alexander::Alexander;
 use super::polyline::{Dense, check_clearance, equal_chords};
 use super::{Clamp, Family, KnotError, StartShape, check_knot};

@@ -232,7 +232,7 @@ pub fn presets() -> Vec<Preset> {
 pub const KNOT_AXIS: &str = "knot";
 
 /// The parameters a knot-axis object may set.
-const KNOT_FIELDS: [&str; 3] = ["knot", "n", "braid_word"];
+const KNOT_FIELDS: [&str; 4] = ["knot", "n", "braid_word", "cylinder_radius"];
 
 /// A grid axis that is not a parameter: a named material
 /// (`solver::case::MATERIALS`), setting `youngs_modulus`, `density` and

@@ -52,6 +52,12 @@ fn capstan_tension_ratio_is_exp_mu_phi() {
     assert_case("capstan");
 }
 
+/// The same capstan on the rigid cylinder obstacle (a hitch's pole).
+#[test]
+fn capstan_on_the_rigid_cylinder_is_exp_mu_phi() {
+    assert_case("capstan_cylinder");
+}
+
 /// The literal reading of eqs. (9)-(10) (friction only along the previous
 /// sliding direction) lets a wrap creep sideways, so the capstan's tension
 /// ratio falls far short of exp(mu phi): why it is not the default

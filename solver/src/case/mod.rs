@@ -72,9 +72,17 @@ pub enum KnotKind {
     Thief,
     /// The grief knot: the granny pulled by the other end of one rod.
     Grief,
+    /// The clove hitch round a rigid, fixed cylinder ([`crate::knot::hitch`]).
+    CloveHitch,
 }
 
 impl KnotKind {
+    /// Whether it is held by friction against another body, with free
+    /// tails, and may slip: a bend or a hitch.
+    pub fn holds_by_friction(self) -> bool {
+        self.bend().is_some() || self == KnotKind::CloveHitch
+    }
+
     /// The bend it ties, if it is one.
     pub fn bend(self) -> Option<crate::knot::Bend> {
         use crate::knot::Bend;
@@ -83,14 +91,14 @@ impl KnotKind {
             KnotKind::Granny => Some(Bend::Granny),
             KnotKind::Thief => Some(Bend::Thief),
             KnotKind::Grief => Some(Bend::Grief),
-            KnotKind::Overhand | KnotKind::FigureEight | KnotKind::Braid => None,
+            KnotKind::Overhand | KnotKind::FigureEight | KnotKind::Braid | KnotKind::CloveHitch => None,
         }
     }
 }
 
-/// F bar at which a bend's pull stops, tight, when `max_force_bar` is not
-/// given (a bend has no inversion, and its free tails keep its own length
-/// from the stopping rule `min_l_k_bar`).
+/// F bar at which a bend's or a hitch's pull stops, tight, when
+/// `max_force_bar` is not given (neither has an inversion, and their free
+/// tails keep their own length from the stopping rule `min_l_k_bar`).
 pub const BEND_TIGHT_FORCE_BAR: f64 = 0.05;
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;
@@ -237,6 +245,12 @@ impl CaseParams {
                  act on one rod's two clamps",
                 self.knot
             ))
+        } else if self.knot == KnotKind::CloveHitch && (soft || turns) {
+            Err(format!(
+                "knot \"{}\" lets its tail go once set: its standing end is pulled, held or released; soft and \
+                 rotate stages act on two clamps",
+                self.knot
+            ))
         } else if soft && !along_x {
             Err("a soft stage needs the clamps on the x axis, as the builder's knots are: this initial_shape's \
                  ends are not"
@@ -251,10 +265,10 @@ impl CaseParams {
     }
 
     /// F bar above which a tightening stops, the knot tight:
-    /// `max_force_bar`, or [`BEND_TIGHT_FORCE_BAR`] for a bend.
+    /// `max_force_bar`, or [`BEND_TIGHT_FORCE_BAR`] for a bend or a hitch.
     pub fn tight_force_bar(&self) -> Option<f64> {
-        match (self.max_force_bar, self.knot.bend()) {
-            (None, Some(_)) => Some(BEND_TIGHT_FORCE_BAR),
+        match (self.max_force_bar, self.knot.holds_by_friction()) {
+            (None, true) => Some(BEND_TIGHT_FORCE_BAR),
             (given, _) => given,
         }
     }
@@ -558,6 +572,51 @@ mod tests {
         let (field, reason) = refusal(short);
         assert_eq!(field, "length");
         assert!(reason.contains("needs a rod of at least"), "{reason}");
+    }
+
+    /// The clove hitch is tied on its cylinder, whose radius only it reads:
+    /// given to another knot, or not positive, it is refused naming the
+    /// field; so are a start twist and a user's start shape.
+    #[test]
+    fn the_cylinder_radius_belongs_to_the_hitch() {
+        let refusal = |p: CaseParams| {
+            let errors = p.validate().unwrap_err();
+            (errors[0].field.clone(), errors[0].reason.clone())
+        };
+        let hitch = CaseParams {
+            knot: KnotKind::CloveHitch,
+            ..CaseParams::default()
+        };
+        let valid = hitch.validated().unwrap();
+        let cylinder = valid.start().cylinder.expect("a hitch has its cylinder");
+        assert_eq!(cylinder.radius, 10.0 * hitch.h);
+        assert_eq!(hitch.tight_force_bar(), Some(BEND_TIGHT_FORCE_BAR));
+        assert_eq!(hitch.rest_length(), hitch.length);
+        let given = CaseParams {
+            cylinder_radius: Some(0.02),
+            ..hitch.clone()
+        };
+        assert_eq!(given.validated().unwrap().start().cylinder.unwrap().radius, 0.02);
+        for bad in [0.0, -0.01] {
+            let (field, _) = refusal(CaseParams {
+                cylinder_radius: Some(bad),
+                ..hitch.clone()
+            });
+            assert_eq!(field, "cylinder_radius", "{bad}");
+        }
+        let (field, reason) = refusal(CaseParams {
+            cylinder_radius: Some(0.02),
+            ..CaseParams::default()
+        });
+        assert_eq!(field, "cylinder_radius");
+        assert!(reason.contains("has none"), "{reason}");
+        let (field, _) = refusal(CaseParams {
+            start_twist: Some(0.0),
+            ..hitch.clone()
+        });
+        assert_eq!(field, "start_twist");
+        let (field, _) = refusal(CaseParams { n: 2, ..hitch });
+        assert_eq!(field, "n");
     }
 
     #[test]

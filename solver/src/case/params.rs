@@ -6,8 +6,8 @@ use super::{
     MAX_NODES, MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{
-    BendSpec, BraidSpec, BraidWord, FigureEightSpec, Knot, KnotError, MAX_PASSES, MAX_RADIUS_RATIO,
-    StartShape,
+    self, BendSpec, BraidSpec, BraidWord, CloveHitchSpec, FigureEightSpec, Knot, KnotError, MAX_PASSES,
+    MAX_RADIUS_RATIO, StartShape,
 };
 use serde::{Deserialize, Serialize};
 
@@ -22,6 +22,8 @@ pub struct CaseParams {
     pub n: u32,
     /// The braid word of a braid knot.
     pub braid_word: Option<String>,
+    /// The radius of a hitch's cylinder (m); `None`: [`CaseParams::pole_radius`]'s.
+    pub cylinder_radius: Option<f64>,
     /// Rod radius h (m).
     pub h: f64,
     /// Friction coefficient mu.
@@ -92,6 +94,7 @@ impl Default for CaseParams {
             knot: KnotKind::Overhand,
             n: 3,
             braid_word: None,
+            cylinder_radius: None,
             h: 1.6e-3,
             mu: 0.1,
             friction_law: FrictionLaw::default(),
@@ -146,6 +149,7 @@ pub const PARAMETERS: &[Parameter] = &[
             "granny",
             "thief",
             "grief",
+            "clove_hitch",
         ]),
         null: None,
         paper: "\"overhand\"",
@@ -157,7 +161,14 @@ pub const PARAMETERS: &[Parameter] = &[
               \"reef\", \"granny\", \"thief\" and \"grief\" tie two rods of length L together, pull their standing \
               ends apart with the tails free until tight (max_force_bar, default 0.05) or until the rods slip \
               apart, and report whether the rods still hold each other and the holding force (the largest F bar \
-              before they part), with l_k bar = (2L - the pulled clamps' distance) / h.",
+              before they part), with l_k bar = (2L - the pulled clamps' distance) / h. \"clove_hitch\" ties the rod \
+              round a rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls \
+              its two ends apart, away from the cylinder, until the hitch has set (F bar 0.025), lets the tail go \
+              with a weight of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default \
+              0.05) or until the rod slips round the cylinder (less than one and a half turns left on it): tied and \
+              holding_force_bar as for a bend, \
+              l_k bar = (L - the standing end's distance from where the tail was held) / h; the report carries \
+              the cylinder.",
         value: UNCHECKED,
     },
     Parameter {
@@ -184,6 +195,19 @@ pub const PARAMETERS: &[Parameter] = &[
               s2^-1 or s1^3, separated by spaces; at most 5 strands and 64 letters, and the closure must be a \
               knot (one component). \"s1 s1 s1\" is the trefoil, \"s1 s2^-1 s1 s2^-1\" the figure-eight.",
         value: UNCHECKED,
+    },
+    Parameter {
+        name: "cylinder_radius",
+        group: Group::Knot,
+        unit: "m",
+        default: "null",
+        range: Range::LengthOver(Bound::Open(f64::INFINITY), Bound::Closed(20.0)),
+        null: Some("for \"clove_hitch\", 10 h; no cylinder for the other knots"),
+        paper: "",
+        doc: "Radius R of the rigid, fixed cylinder (a pole, its axis z through the origin) that knot \
+              \"clove_hitch\" is tied round; other knots have none (leave it out). At most L/20: the rod must wrap \
+              it twice and keep its ends.",
+        value: |p| p.cylinder_radius.map(Value::Number),
     },
     Parameter {
         name: "h",
@@ -665,6 +689,13 @@ impl CaseParams {
     pub(super) fn start_shape(&self) -> Result<StartShape, FieldError> {
         let knot = self.knot()?;
         match &self.initial_shape {
+            Some(_) if matches!(knot, Knot::CloveHitch(_)) => Err(FieldError {
+                field: "initial_shape".to_string(),
+                reason: format!(
+                    "initial_shape gives a knot's rods; {} is tied round its cylinder by the solver: leave it out",
+                    knot.name()
+                ),
+            }),
             Some(shape) => shape.checked(&knot, (self.length, self.node_count(), self.h)),
             None => knot.tie().map_err(|e| self.knot_error(e)),
         }
@@ -678,6 +709,13 @@ impl CaseParams {
             (KnotKind::Braid, Some(word)) => format!("braid {}", word.trim()),
             (kind, _) => kind.to_string(),
         }
+    }
+
+    /// The radius of a hitch's cylinder: `cylinder_radius`, or
+    /// [`knot::hitch::DEFAULT_RADIUS`] h.
+    pub fn pole_radius(&self) -> f64 {
+        self.cylinder_radius
+            .unwrap_or(knot::hitch::DEFAULT_RADIUS * self.h)
     }
 
     /// The knot of the catalog this case ties; a parameter that does not
@@ -706,6 +744,20 @@ impl CaseParams {
             return Err(refuse(
                 "start_twist",
                 format!("knot \"{kind}\" is a bend: its tails are free, so no twist is held between clamps"),
+            ));
+        }
+        if kind == KnotKind::CloveHitch && self.start_twist.is_some() {
+            return Err(refuse(
+                "start_twist",
+                format!("knot \"{kind}\" lets its tail go once set, so no twist is held between clamps"),
+            ));
+        }
+        if kind != KnotKind::CloveHitch && self.cylinder_radius.is_some() {
+            return Err(refuse(
+                "cylinder_radius",
+                format!(
+                    "cylinder_radius is the radius of a hitch's cylinder; knot \"{kind}\" has none: leave it out"
+                ),
             ));
         }
         let word = match (kind, &self.braid_word) {
@@ -739,6 +791,12 @@ impl CaseParams {
                 length,
                 nodes,
                 radius,
+            }),
+            (KnotKind::CloveHitch, _) => Knot::CloveHitch(CloveHitchSpec {
+                length,
+                nodes,
+                radius,
+                cylinder_radius: self.pole_radius(),
             }),
             (kind, _) => Knot::Bend(BendSpec {
                 bend: kind.bend().expect("every other knot is a bend"),

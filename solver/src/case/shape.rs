@@ -230,6 +230,7 @@ fn bend(
         loop_middle: 0,
         alexander: None,
         clamps: [clamps[0], clamps[1]],
+        cylinder: None,
     })
 }
 

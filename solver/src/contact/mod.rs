@@ -1,11 +1,12 @@
 //! Frictional contact between rods (paper Sec. 3.2): the data model
 //! ([`point`], [`problem`], [`options`], [`report`], [`error`]), detection
 //! ([`broad_phase`], [`segment`] or the smooth [`curve`], [`narrow_phase`]), the friction cone
-//! ([`cone`]) and the two solvers ([`gauss_seidel`] on the lumped mass,
+//! ([`cone`]), a rigid obstacle ([`cylinder`]) and the two solvers ([`gauss_seidel`] on the lumped mass,
 //! [`dense`] on a dense Delassus operator).
 pub mod broad_phase;
 pub mod cone;
 pub mod curve;
+pub mod cylinder;
 pub mod dense;
 pub mod error;
 pub mod gauss_seidel;
@@ -16,6 +17,7 @@ pub mod problem;
 pub mod report;
 pub mod segment;
 
+pub use cylinder::Cylinder;
 pub use error::ContactError;
 pub use options::{Candidates, ContactOptions, ContactSolve, FrictionLaw, GaussSeidelOptions, Geometry};
 pub use point::{ContactPoint, SpinDofs};

@@ -191,6 +191,7 @@ impl BendSpec {
                     end: End::Start,
                 },
             ],
+            cylinder: None,
         })
     }
 }

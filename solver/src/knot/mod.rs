@@ -6,20 +6,24 @@
 //! - [`figure_eight`]: the figure-eight knot `4_1`;
 //! - [`braid`]: the closure of any braid word on at most 5 strands;
 //! - [`bends`]: two rods tied together, the reef, granny, thief and grief
-//!   knots.
+//!   knots;
+//! - [`hitch`]: the clove hitch, one rod tied round a rigid, fixed cylinder.
 //!
 //! A family's knot is a [`StartShape`]: its rods' centre lines with the two
 //! pulled clamps (a one-rod knot's two ends; a bend's two standing ends, its
 //! tails free) and, for a knot in one rod, its Alexander polynomial
 //! ([`alexander`]), which the builder checks on the shape it ties and the
 //! run on the shape at the end; a bend has none (its rods are open and
-//! separate): the run reports whether its rods still hold each other.
+//! separate): the run reports whether its rods still hold each other; nor
+//! has a hitch (its rod alone is unknotted): the run reports whether it
+//! still holds the pole ([`StartShape::cylinder`]).
 //! [`topology`] gives the cheaper knot determinant `|Delta(-1)|` checked at
 //! every sample; [`twist`] the writhe and the start twist.
 mod alexander;
 pub mod bends;
 pub mod braid;
 pub mod figure_eight;
+pub mod hitch;
 pub mod overhand;
 mod polyline;
 mod start;
@@ -30,6 +34,7 @@ pub use alexander::{Alexander, alexander, alexander_along, closed_alexander};
 pub use bends::{Bend, BendSpec};
 pub use braid::{BraidError, BraidSpec, BraidWord};
 pub use figure_eight::FigureEightSpec;
+pub use hitch::{CloveHitchSpec, wrap_turns};
 pub use overhand::{
     BRAID_MARGIN, KNOT_RADII, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
     MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
@@ -67,6 +72,7 @@ pub enum Knot {
     FigureEight(FigureEightSpec),
     Braid(BraidSpec),
     Bend(BendSpec),
+    CloveHitch(CloveHitchSpec),
 }
 
 impl Knot {
@@ -76,6 +82,7 @@ impl Knot {
             Knot::Overhand(spec) => Some(spec),
             Knot::FigureEight(spec) => Some(spec),
             Knot::Braid(spec) => Some(spec),
+            Knot::CloveHitch(spec) => Some(spec),
             Knot::Bend(_) => None,
         }
     }
@@ -87,13 +94,18 @@ impl Knot {
             Knot::FigureEight(_) => "the figure-eight knot".to_string(),
             Knot::Braid(spec) => format!("the closure of the braid {}", spec.word),
             Knot::Bend(spec) => spec.bend.name().to_string(),
+            Knot::CloveHitch(_) => "the clove hitch".to_string(),
         }
     }
 
-    /// The Alexander polynomial of a knot in one rod ([`Family::alexander`]);
-    /// `None` for a bend.
+    /// The Alexander polynomial a knot in one rod keeps
+    /// ([`Family::alexander`]); `None` for a bend and a hitch (held by
+    /// another body, not by a knot type).
     pub fn alexander(&self) -> Option<Alexander> {
-        self.family().map(Family::alexander)
+        match self {
+            Knot::CloveHitch(_) => None,
+            _ => self.family().map(Family::alexander),
+        }
     }
 
     /// Its loose, contact-free start shape ([`Family::tie`], [`BendSpec::tie`]).
@@ -133,8 +145,11 @@ pub struct StartShape {
     pub alexander: Option<Alexander>,
     /// The clamps pulled apart along the line joining them, the first
     /// towards its side, the second towards its: a one-rod knot's start and
-    /// finish, a bend's standing ends. Every other end is free.
+    /// finish, a bend's standing ends, a hitch's standing end and tail.
+    /// Every other end is free.
     pub clamps: [Clamp; 2],
+    /// The rigid, fixed cylinder a hitch is tied round; `None` for a knot.
+    pub cylinder: Option<crate::contact::Cylinder>,
 }
 
 impl StartShape {
@@ -159,12 +174,18 @@ impl StartShape {
                     end: End::Finish,
                 },
             ],
+            cylinder: None,
         }
     }
 
     /// Whether it is a bend (several rods).
     pub fn is_bend(&self) -> bool {
         self.rods.len() > 1
+    }
+
+    /// Whether it is a hitch (tied round a cylinder).
+    pub fn is_hitch(&self) -> bool {
+        self.cylinder.is_some()
     }
 
     /// The two pulled clamps' positions (the end nodes).

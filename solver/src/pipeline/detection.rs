@@ -1,7 +1,7 @@
 //! Step 1 of [`World::step`]: the contacts at the start of the step (broad
 //! phase, closest points, the narrow phase's choices), and the
 //! penetrations the step's end leaves.
-use super::{World, WorldError};
+use super::{Body, World, WorldError};
 use crate::contact::broad_phase::Segment;
 use crate::contact::curve::{Piece, closest_points_on_pieces};
 use crate::contact::segment::closest_points;
@@ -23,6 +23,10 @@ pub(super) const SKIN: f64 = 0.25;
 /// many steps; 0.35 and 0.42 dropped constraints a line contact needs (the
 /// step shrank for penetration: 1.3 and 1.7 times the steps).
 const MERGE_FRACTION: f64 = 0.25;
+
+/// The first id of an obstacle contact's pair, `(OBSTACLE, segment)`: after
+/// every pair of segments, so that the pairs stay sorted.
+const OBSTACLE: usize = usize::MAX;
 
 impl World {
     /// The contacts of the start-of-step state into `contacts` (and their
@@ -132,21 +136,47 @@ impl World {
                 c.spin = [(ea, lever(sa.radius, &ta)), (eb, lever(sb.radius, &tb))];
             }
             if self.contact.friction_law == FrictionLaw::SlidingDirection {
-                let velocity = |g: usize| {
-                    let body = self.bodies.partition_point(|b| b.first_node <= g) - 1;
-                    self.rods[body].node_velocity(g - self.bodies[body].first_node)
-                };
-                let (nodes, weights) = c.stencil();
-                let mut u = weights[0] * velocity(nodes[0]);
-                for (&g, &w) in nodes.iter().zip(weights).skip(1) {
-                    u += w * velocity(g);
-                }
-                c.sliding_direction = narrow_phase::sliding_direction(&u, &c.normal);
+                c.sliding_direction = narrow_phase::sliding_direction(
+                    &relative_velocity(&self.rods, &self.bodies, &c),
+                    &c.normal,
+                );
             }
             self.contacts.push(c);
             self.pair_ids.push((p.i, p.j));
         }
+        self.detect_obstacle(margin);
         Ok(())
+    }
+
+    /// Each segment's contact with the obstacle, after the rods' own, with
+    /// pair id `(OBSTACLE, segment)`.
+    fn detect_obstacle(&mut self, margin: f64) {
+        let Some(cylinder) = self.obstacle else {
+            return;
+        };
+        let mu = self.contact.friction;
+        for (k, s) in self.segments.iter().enumerate() {
+            let first = self.bodies[s.body].first_node + s.index;
+            let Some(mut c) = cylinder.contact([first, first + 1], (&s.a, &s.b), s.radius, margin, mu) else {
+                continue;
+            };
+            if c.gap < 0.0 {
+                c.gap *= self.contact.penetration_recovery;
+            }
+            if self.contact.rolling {
+                let edge = self.bodies[s.body].first_edge + s.index;
+                let lever = -s.radius * (s.b - s.a).normalize().cross(&c.normal);
+                c.spin = [(edge, lever), (edge, Vector3::zeros())];
+            }
+            if self.contact.friction_law == FrictionLaw::SlidingDirection {
+                c.sliding_direction = narrow_phase::sliding_direction(
+                    &relative_velocity(&self.rods, &self.bodies, &c),
+                    &c.normal,
+                );
+            }
+            self.contacts.push(c);
+            self.pair_ids.push((OBSTACLE, k));
+        }
     }
 
     /// Largest penetration over the detected pairs at the current positions.
@@ -157,7 +187,15 @@ impl World {
 
     /// How far segments `i` and `j` overlap at the current positions:
     /// `r_a + r_b` minus their distance (negative when apart).
+    /// `i` is [`OBSTACLE`] for segment `j`'s contact with the obstacle.
     pub(super) fn penetration(&self, i: usize, j: usize) -> f64 {
+        if i == OBSTACLE {
+            let s = &self.segments[j];
+            let rod = &self.rods[s.body];
+            return self.obstacle.map_or(f64::NEG_INFINITY, |c| {
+                c.penetration(&rod.node(s.index), &rod.node(s.index + 1), s.radius)
+            });
+        }
         let (sa, sb) = (&self.segments[i], &self.segments[j]);
         let distance = match self.contact.geometry {
             Geometry::Smooth => {
@@ -198,4 +236,18 @@ fn largest_chord_deviation(rods: &[Rod]) -> f64 {
         }
     }
     largest
+}
+
+/// The relative velocity of contact `c`'s points at the start of the step.
+fn relative_velocity(rods: &[Rod], bodies: &[Body], c: &ContactPoint) -> Vector3<f64> {
+    let velocity = |g: usize| {
+        let body = bodies.partition_point(|b| b.first_node <= g) - 1;
+        rods[body].node_velocity(g - bodies[body].first_node)
+    };
+    let (nodes, weights) = c.stencil();
+    let mut u = weights[0] * velocity(nodes[0]);
+    for (&g, &w) in nodes.iter().zip(weights).skip(1) {
+        u += w * velocity(g);
+    }
+    u
 }

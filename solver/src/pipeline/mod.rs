@@ -1,7 +1,8 @@
 //! One time step of several rods with frictional contact (paper Sec. 3.2):
 //!
 //! 1. detection on the start-of-step state: broad phase, then segment-segment
-//!    closest points, pairs closer than r_a + r_b + margin;
+//!    closest points, pairs closer than r_a + r_b + margin, and each
+//!    segment's contact with the obstacle, if there is one;
 //! 2. free velocities evaluated explicitly from the start-of-step state,
 //!    v_free = v + dt M^-1 (F_int + F_ext), as in the paper's code, so that the
 //!    mass-only Delassus operator W = dt H^T M^-1 H is the consistent one;
@@ -25,7 +26,7 @@ pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use crate::contact::curve::CurvePair;
 use crate::contact::gauss_seidel::GaussSeidel;
-use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve};
+use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve, Cylinder};
 use crate::counters::Counters;
 use crate::energies::Energies;
 use crate::external::Environment;
@@ -77,6 +78,8 @@ pub struct World {
     bodies: Vec<Body>,
     pub env: Environment,
     pub contact: ContactOptions,
+    /// A rigid, fixed cylinder the rods touch (a hitch's pole), if any.
+    pub obstacle: Option<Cylinder>,
     pub counters: Counters,
     spin_inv_inertia: Vec<f64>,
     spin_free: Vec<f64>,
@@ -161,6 +164,7 @@ impl World {
             bodies,
             env,
             contact,
+            obstacle: None,
             counters: Counters::default(),
             spin_inv_inertia: vec![0.0; total_edges],
             spin_free: vec![0.0; total_edges],

@@ -167,17 +167,22 @@ pub struct CaseReport {
     /// revision 8, and where no sample was taken at `pull_speed`).
     #[serde(default)]
     pub quasi_static: Option<QuasiStatic>,
-    /// A bend: whether its rods still hold each other at the end (a slip is
-    /// an outcome, not a failure); absent for a knot in one rod.
+    /// A bend: whether its rods still hold each other at the end; a hitch:
+    /// whether it still holds its cylinder (a slip is an outcome, not a
+    /// failure); absent for a knot in one rod.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tied: Option<bool>,
-    /// A bend: the holding force, the largest F bar with the tails free
-    /// before the rods parted (its slip-through event's), or, where they
-    /// held to the end, the largest F bar they held (a lower bound); absent
-    /// for a knot in one rod.
+    /// A bend or a hitch: the holding force, the largest F bar with the
+    /// tails free before the rods parted or the hitch slipped (its
+    /// slip-through event's), or, where it held to the end, the largest F
+    /// bar it held (a lower bound); absent for a knot in one rod.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub holding_force_bar: Option<f64>,
-    /// A bend's own measurements at each sample of `series`.
+    /// A hitch's cylinder (centre, axis, radius, length; m), for viewers;
+    /// absent for a knot without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<crate::contact::Cylinder>,
+    /// A bend's or a hitch's own measurements at each sample of `series`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bend_series: Vec<BendSample>,
 }
@@ -189,12 +194,14 @@ pub struct BendSample {
     /// along its own side of the pull, averaged over the sample's interval.
     #[serde(rename = "F_bar")]
     pub f_bar: [f64; 2],
-    /// Each rod's elastic energy over EI / h (eq. 6 by node, `energies::within`).
+    /// Each rod's elastic energy over EI / h (eq. 6 by node, `energies::within`;
+    /// a hitch's one rod, and 0).
     #[serde(rename = "E_bar")]
     pub energy_bar: [f64; 2],
     /// The rods have come apart: they neither touch (no two segments within
     /// half a radius of each other's surface) nor bend (each rod's elastic
-    /// energy below 0.02 EI / h).
+    /// energy below 0.02 EI / h); a hitch's rod wraps its cylinder by less
+    /// than one and a half turns.
     pub apart: bool,
     /// The tails are free (the bend has set).
     pub tails_free: bool,
@@ -224,6 +231,7 @@ impl CaseReport {
             quasi_static: None,
             tied: None,
             holding_force_bar: None,
+            cylinder: None,
             bend_series: Vec::new(),
         }
     }

@@ -5,14 +5,14 @@ use super::adaptive::{Outcome, Phase, RELAX_DAMPING};
 use super::report::{BendSample, CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
 use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
-use crate::contact::GaussSeidelOptions;
+use crate::contact::{Cylinder, GaussSeidelOptions};
 use crate::energies;
 use crate::external::{Environment, sliding};
 use crate::knot::{self, Alexander, Clamp, StartShape};
 use crate::material::Material;
 use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::{ContactOptions, World, WorldStepReport};
-use crate::rod::{End, Rod};
+use crate::rod::{End, Rod, node_dof};
 use crate::snapshot::{Snapshot, SnapshotLabel};
 use crate::stepper::NewtonOptions;
 use crate::time_step::{AdaptiveOptions, TimeStep};
@@ -33,6 +33,15 @@ pub(super) const PARTED: f64 = 0.5;
 /// along the pull, within reach of each other; a tied one's bights hold
 /// their bends.
 pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
+/// F bar of the constant load that holds a hitch's tail once it is let go
+/// (a fifth of the setting load): a free tail is flung off the cylinder by
+/// the turns' own bending as soon as it is let go (at mu 0.1 ... 0.5, R =
+/// 10 h), so the tail hangs a weight, as in a hitch's holding test.
+pub const HITCH_TAIL_FORCE_BAR: f64 = 0.2 * BEND_SET_FORCE_BAR;
+/// A hitch has slipped when its rod wraps the cylinder by less than this
+/// many turns: its tail has left the pinch under the diagonal and half a
+/// turn more has unwound (it starts with two turns and its ends' lines).
+pub(super) const HITCH_SLIPPED_TURNS: f64 = 1.5;
 /// Penetration (fraction of h) that ends a case as `Penetrated`.
 const MAX_PENETRATION: f64 = 0.5;
 /// What to change when a case fails in a step: the numerical options that
@@ -148,7 +157,10 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         gravity: Vector3::from(params.gravity) / scales.mass_scale,
         damping: RELAX_DAMPING / scales.time_unit,
     };
-    Ok(World::new(rods, env, contact, newton))
+    let mut world = World::new(rods, env, contact, newton);
+    world.obstacle = shape.cylinder;
+    report.cylinder = shape.cylinder;
+    Ok(world)
 }
 
 /// The force unit of F bar: EI / h^2 (eq. 11).
@@ -158,14 +170,15 @@ pub(super) fn force_unit(params: &CaseParams) -> f64 {
 
 /// The pulling force (N) on the knot along `axis` after the last step: the
 /// mean of the two pulled clamps' reactions along the pull, or of the
-/// springs' tensions when the clamps sit on springs (a soft stage).
-fn pulling_force(world: &World, clamps: &[Clamp; 2], axis: &Vector3<f64>) -> f64 {
+/// springs' tensions when the clamps sit on springs (a soft stage), or,
+/// once a hitch's tail is let go (`lone`), the first clamp's.
+fn pulling_force(world: &World, clamps: &[Clamp; 2], axis: &Vector3<f64>, lone: bool) -> f64 {
     let rod = &world.rods[clamps[0].rod];
     if let [start, finish] = rod.springs[..] {
         return 0.5 * (finish.force(&rod.q, finish.anchor) - start.force(&rod.q, start.anchor));
     }
     let [start, finish] = clamp_forces(world, clamps, axis);
-    0.5 * (start + finish)
+    if lone { start } else { 0.5 * (start + finish) }
 }
 
 /// Each pulled clamp's pull (N) along its own side of `axis` after the last
@@ -201,10 +214,9 @@ pub(super) fn clamp_point(world: &World, c: &Clamp) -> Vector3<f64> {
     }
 }
 
-/// eq. 11's l_k bar of `world` (a bend's: the rods' rest lengths less the
-/// pulled clamps' distance, over h).
-fn l_k_bar_of(world: &World, clamps: &[Clamp; 2], params: &CaseParams) -> f64 {
-    let [a, b] = clamps.map(|c| clamp_point(world, &c));
+/// eq. 11's l_k bar for the pulled clamps at `[a, b]` (a bend's: the rods'
+/// rest lengths less the pulled clamps' distance, over h).
+fn l_k_bar_of([a, b]: [Vector3<f64>; 2], params: &CaseParams) -> f64 {
     (params.rest_length() - (b - a).norm()) / params.h
 }
 
@@ -230,8 +242,15 @@ pub(super) struct Carried {
     pub(super) impulse_time: f64,
     /// Each pulled clamp's force integrated over the same time (a bend's).
     pub(super) clamp_impulses: [f64; 2],
-    /// A bend's tails are still held (until it has set, `release_tails`).
+    /// A bend's tails, or a hitch's, are still held (until it has set,
+    /// `release_tails`).
     pub(super) tails_held: bool,
+    /// Where a hitch's tail was held when it was let go: the far end of
+    /// its l_k bar from then on.
+    pub(super) tail_anchor: Option<Vector3<f64>>,
+    /// The load (N) on a hitch's tail end once it is let go
+    /// ([`HITCH_TAIL_FORCE_BAR`]).
+    pub(super) tail_load: Option<Vector3<f64>>,
     /// The loop's middle node, from the builder and then tracked from each
     /// sample's braid ends.
     pub(super) mid: usize,
@@ -255,6 +274,8 @@ pub(super) struct Case<'a> {
     expected: u64,
     /// The two pulled clamps.
     pub(super) clamps: [Clamp; 2],
+    /// A hitch's cylinder.
+    cylinder: Option<Cylinder>,
     /// The case's inertia and time unit.
     pub(super) scales: Scales,
     /// Unit vector from the start clamp to the finish clamp.
@@ -290,7 +311,9 @@ impl<'a> Case<'a> {
             impulse: 0.0,
             impulse_time: 0.0,
             clamp_impulses: [0.0; 2],
-            tails_held: start.is_bend(),
+            tails_held: start.is_bend() || start.is_hitch(),
+            tail_anchor: None,
+            tail_load: None,
             mid: start.loop_middle,
             twist: Tracker::new(rod, report.writhe),
             history: VecDeque::with_capacity(SNAPSHOT_HISTORY),
@@ -305,6 +328,7 @@ impl<'a> Case<'a> {
             alexander: start.alexander.clone(),
             expected: start.alexander.as_ref().map_or(0, Alexander::determinant),
             clamps: start.clamps,
+            cylinder: start.cylinder,
             scales: params.scales(),
             axis,
             program: params.program(),
@@ -315,7 +339,20 @@ impl<'a> Case<'a> {
     }
 
     pub(super) fn l_k_bar(&self) -> f64 {
-        l_k_bar_of(&self.world, &self.clamps, self.params)
+        l_k_bar_of(self.clamp_points(), self.params)
+    }
+
+    /// Where the pulled clamps are: a hitch's second, once its tail is let
+    /// go, where the tail was held.
+    fn clamp_points(&self) -> [Vector3<f64>; 2] {
+        let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
+        [a, self.carried.tail_anchor.unwrap_or(b)]
+    }
+
+    /// The pulling force after the last step ([`pulling_force`]).
+    fn pulling_force(&self) -> f64 {
+        let lone = self.carried.tail_anchor.is_some();
+        pulling_force(&self.world, &self.clamps, &self.axis, lone)
     }
 
     /// The knot's own length, which the stopping rules and the adaptive
@@ -328,7 +365,7 @@ impl<'a> Case<'a> {
         let arc: f64 = (self.world.rods.iter())
             .flat_map(|r| (1..r.nodes()).map(|i| (r.node(i) - r.node(i - 1)).norm()))
             .sum();
-        let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
+        let [a, b] = self.clamp_points();
         (arc - (b - a).norm()) / self.params.h
     }
 
@@ -337,12 +374,24 @@ impl<'a> Case<'a> {
     /// bend of elastic rods springs open when its tails are free; a knot
     /// tied by hand is set by pulling its four ends before its standing ends
     /// are loaded).
+    /// A hitch's tail is its second clamp: from then on it hangs a weight
+    /// ([`HITCH_TAIL_FORCE_BAR`]) and its standing end alone is pulled,
+    /// against the cylinder.
     pub(super) fn release_tails(&mut self, f_bar: f64) {
         if !self.carried.tails_held || f_bar < BEND_SET_FORCE_BAR {
             return;
         }
         self.carried.tails_held = false;
-        for tail in tails(&self.clamps) {
+        let freed = match self.cylinder {
+            Some(_) => {
+                self.carried.tail_anchor = Some(clamp_point(&self.world, &self.clamps[1]));
+                let weight = HITCH_TAIL_FORCE_BAR * force_unit(self.params);
+                self.carried.tail_load = Some(self.axis * weight);
+                vec![self.clamps[1]]
+            }
+            None => tails(&self.clamps).to_vec(),
+        };
+        for tail in freed {
             let rod = &mut self.world.rods[tail.rod];
             for d in rod.clamp_dofs(tail.end) {
                 rod.fixed[d] = false;
@@ -359,7 +408,33 @@ impl<'a> Case<'a> {
         ));
     }
 
-    /// Whether the case pulls a bend (two rods).
+    /// Puts a hitch's tail load on its tail end, added to the sliding
+    /// exemption just written (`exempted`) or in place of the zero load.
+    fn hang_tail_load(&mut self, exempted: bool) {
+        let (Some(weight), tail) = (self.carried.tail_load, self.clamps[1]) else {
+            return;
+        };
+        self.world.set_load(tail.rod, |rod, load| {
+            let d = match tail.end {
+                End::Start => node_dof(0),
+                End::Finish => node_dof(rod.nodes() - 1),
+            };
+            for (i, f) in weight.iter().enumerate() {
+                load[d + i] = if exempted { load[d + i] + f } else { *f };
+            }
+        });
+    }
+
+    /// Moves clamp `c` at `v`, unless it has been let go (a hitch's tail).
+    pub(super) fn move_held_clamp(&mut self, c: Clamp, v: Vector3<f64>) {
+        let rod = &mut self.world.rods[c.rod];
+        if rod.fixed[rod.clamp_dofs(c.end)[0]] {
+            rod.move_clamp(c.end, v);
+        }
+    }
+
+    /// Whether the case pulls a bend (two rods) or a hitch: no knot type
+    /// to keep, tails let go once set, and it may slip.
     pub(super) fn is_bend(&self) -> bool {
         self.alexander.is_none()
     }
@@ -519,16 +594,18 @@ impl<'a> Case<'a> {
                     .set_load(rod, |rod, load| sliding::exempt_sliding(rod, gamma, load));
             }
         }
+        self.hang_tail_load(phase.spares_sliding());
         let (step, dt) = match self.clock.advance(&mut self.world) {
             Ok(s) => (s.report, s.dt),
             Err(e) => return Err(Ending::new(Status::Diverged, format!("{e}; {STEP_HINT}"))),
         };
         let kinetic_energy = self.kinetic_energy();
+        let force = self.pulling_force();
         let c = &mut self.carried;
         c.time += dt;
         c.twist.step(&self.world.rods[0]);
         c.peak_kinetic_energy = c.peak_kinetic_energy.max(kinetic_energy);
-        c.impulse += dt * pulling_force(&self.world, &self.clamps, &self.axis);
+        c.impulse += dt * force;
         c.impulse_time += dt;
         if self.alexander.is_none() {
             let forces = clamp_forces(&self.world, &self.clamps, &self.axis);
@@ -558,6 +635,7 @@ impl<'a> Case<'a> {
             for rod in 0..self.world.rods.len() {
                 self.world.set_load(rod, |_, load| load.fill(0.0));
             }
+            self.hang_tail_load(false);
         }
         if self.params.adaptive_dt {
             self.clock.rescale(phase.dt_max(self.params.time_step()));
@@ -603,12 +681,13 @@ impl<'a> Case<'a> {
             self.sample_bend();
         }
         let l_k_arc_bar = self.l_k_arc_bar();
+        let now = self.pulling_force();
         let rod = &self.world.rods[0];
         let c = &mut self.carried;
         let force = if c.impulse_time > 0.0 {
             c.impulse / c.impulse_time
         } else {
-            pulling_force(&self.world, &self.clamps, &self.axis)
+            now
         };
         (c.impulse, c.impulse_time) = (0.0, 0.0);
         let points = rod.positions();
@@ -678,7 +757,9 @@ impl<'a> Case<'a> {
 
     /// A bend's own sample: each pulled clamp's F bar (averaged over the
     /// interval, as F bar is), each rod's elastic energy and whether the
-    /// rods have come apart ([`PARTED`]).
+    /// rods have come apart ([`PARTED`]); a hitch's: its two clamps' F bar,
+    /// its rod's energy (the second 0) and whether it has slipped round the
+    /// cylinder ([`HITCH_SLIPPED_TURNS`]).
     fn sample_bend(&mut self) {
         let params = self.params;
         let c = &mut self.carried;
@@ -691,13 +772,22 @@ impl<'a> Case<'a> {
         let energy_unit = params.bending_stiffness() / params.h;
         let rods = &self.world.rods;
         let positions: Vec<Vec<Vector3<f64>>> = rods.iter().map(Rod::positions).collect();
-        let edge = rods[0].rest_len[0];
-        let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
-        let energy_bar = [0, 1].map(|i| energies::within(&rods[i], 0..rods[i].nodes()) / energy_unit);
+        let energy_bar = [0, 1].map(|i| {
+            rods.get(i)
+                .map_or(0.0, |rod| energies::within(rod, 0..rod.nodes()) / energy_unit)
+        });
+        let apart = match &self.cylinder {
+            Some(cylinder) => knot::wrap_turns(&positions[0], cylinder).abs() < HITCH_SLIPPED_TURNS,
+            None => {
+                let edge = rods[0].rest_len[0];
+                let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
+                near.is_none() && energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR)
+            }
+        };
         self.report.bend_series.push(BendSample {
             f_bar: forces.map(|f| f / force_unit(params)),
             energy_bar,
-            apart: near.is_none() && energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR),
+            apart,
             tails_free: !c.tails_held,
         });
     }
@@ -739,13 +829,13 @@ impl<'a> Case<'a> {
     /// The report, with the ending's status and the run's statistics.
     fn finish(self, ending: Ending) -> CaseReport {
         let bend = self.is_bend();
+        let clamp_points = self.clamp_points();
         let Case {
             mut report,
             world,
             clock,
             sample_phases,
             started,
-            clamps,
             ..
         } = self;
         report.status = ending.status;
@@ -759,7 +849,7 @@ impl<'a> Case<'a> {
         if report.status != Status::Completed {
             report.inversion = None;
             report.hysteresis = None;
-            let at = l_k_bar_of(&world, &clamps, &report.params);
+            let at = l_k_bar_of(clamp_points, &report.params);
             report.snapshots.push(Snapshot::capture(
                 &world,
                 SnapshotLabel::Failure,

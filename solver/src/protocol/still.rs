@@ -63,7 +63,7 @@ impl Case<'_> {
     ) -> Result<(), Ending> {
         self.enter_phase(phase);
         for clamp in self.clamps {
-            self.world.rods[clamp.rod].move_clamp(clamp.end, nalgebra::Vector3::zeros());
+            self.move_held_clamp(clamp, nalgebra::Vector3::zeros());
         }
         let interval = self.params.sample_interval * self.params.h / (2.0 * self.params.clamp_speed());
         let (mut elapsed, mut next_sample) = (0.0, 0.0);

@@ -345,8 +345,8 @@ impl Case<'_> {
         }
         let v = self.axis * speed;
         let [first, second] = self.clamps;
-        self.world.rods[first.rod].move_clamp(first.end, -v);
-        self.world.rods[second.rod].move_clamp(second.end, v);
+        self.move_held_clamp(first, -v);
+        self.move_held_clamp(second, v);
     }
 
     /// Back to checkpoint `c` of a fast approach, to move slowly through the

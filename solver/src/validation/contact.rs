@@ -240,6 +240,26 @@ fn quadratic_coefficient(samples: &[(f64, f64)]) -> f64 {
 /// with R the wrap radius. Returns (mean pulling force / T during sliding,
 /// exp(mu phi)) under friction law `law`.
 pub fn capstan(mu: f64, phi: f64, law: FrictionLaw, solve: ContactSolve) -> Result<(f64, f64), WorldError> {
+    capstan_on(Drum::FixedRod, mu, phi, law, solve)
+}
+
+/// What the capstan's rope is wrapped on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Drum {
+    /// A rod with every DOF held.
+    FixedRod,
+    /// The world's rigid obstacle ([`crate::contact::Cylinder`]).
+    Cylinder,
+}
+
+/// [`capstan`] on `drum`.
+pub fn capstan_on(
+    drum: Drum,
+    mu: f64,
+    phi: f64,
+    law: FrictionLaw,
+    solve: ContactSolve,
+) -> Result<(f64, f64), WorldError> {
     let (r_fixed, r_rod) = (0.02, 0.3e-3);
     let radius = r_fixed + r_rod + 0.02 * r_rod;
     let pitch = 4.0 * r_rod;
@@ -287,7 +307,20 @@ pub fn capstan(mu: f64, phi: f64, law: FrictionLaw, solve: ContactSolve) -> Resu
         solve,
         ..ContactOptions::default()
     };
-    let mut world = World::new(vec![rope, cylinder], env, contact, NewtonOptions::default());
+    let mut world = match drum {
+        Drum::FixedRod => World::new(vec![rope, cylinder], env, contact, NewtonOptions::default()),
+        Drum::Cylinder => {
+            let [a, b] = [cylinder.node(0), cylinder.node(cylinder.nodes() - 1)];
+            let mut world = World::new(vec![rope], env, contact, NewtonOptions::default());
+            world.obstacle = Some(crate::contact::Cylinder {
+                center: 0.5 * (a + b),
+                axis: (b - a).normalize(),
+                radius: r_fixed,
+                length: (b - a).norm(),
+            });
+            world
+        }
+    };
     let dt = 2e-4;
     let steps = 2500;
     // The load is ramped in over `ramp` steps with the clamp still, then the clamp pulls.

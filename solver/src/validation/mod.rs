@@ -150,6 +150,10 @@ pub fn contact_cases() -> Vec<Case> {
             run: capstan_rows,
         },
         Case {
+            name: "capstan_cylinder",
+            run: capstan_cylinder_rows,
+        },
+        Case {
             name: "washboard",
             run: washboard_rows,
         },
@@ -331,18 +335,47 @@ fn capstan_rows() -> Vec<CaseResult> {
     ] {
         let phi = turns * std::f64::consts::TAU;
         let name = format!("capstan_mu{mu}_phi{}pi{}", 2.0 * turns, solve_suffix(solve));
-        match contact::capstan(mu, phi, crate::contact::FrictionLaw::Isotropic, solve) {
-            Ok((ratio, expected)) => rows.push(CaseResult::relative(
-                &name,
-                "tension ratio at slip exp(mu phi)",
-                expected,
-                ratio,
-                CAPSTAN_PER_MU_PHI * mu * phi,
-            )),
-            Err(e) => rows.push(CaseResult::failed(&name, "tension ratio", e)),
-        }
+        rows.push(capstan_row(&name, contact::Drum::FixedRod, mu, phi, solve));
     }
     rows
+}
+
+/// The capstan on the rigid obstacle (a hitch's cylinder) instead of a
+/// fixed rod: the same rope, drum and tolerance.
+fn capstan_cylinder_rows() -> Vec<CaseResult> {
+    use crate::contact::ContactSolve::Explicit;
+    [(0.1, 0.5), (0.3, 0.5), (0.3, 1.0)]
+        .into_iter()
+        .map(|(mu, turns)| {
+            let name = format!("capstan_cylinder_mu{mu}_phi{}pi", 2.0 * turns);
+            capstan_row(
+                &name,
+                contact::Drum::Cylinder,
+                mu,
+                turns * std::f64::consts::TAU,
+                Explicit,
+            )
+        })
+        .collect()
+}
+
+fn capstan_row(
+    name: &str,
+    drum: contact::Drum,
+    mu: f64,
+    phi: f64,
+    solve: crate::contact::ContactSolve,
+) -> CaseResult {
+    match contact::capstan_on(drum, mu, phi, crate::contact::FrictionLaw::Isotropic, solve) {
+        Ok((ratio, expected)) => CaseResult::relative(
+            name,
+            "tension ratio at slip exp(mu phi)",
+            expected,
+            ratio,
+            CAPSTAN_PER_MU_PHI * mu * phi,
+        ),
+        Err(e) => CaseResult::failed(name, "tension ratio", e),
+    }
 }
 
 /// The washboard (a rope pulled over a rod, frictionless) under the smooth

@@ -40,6 +40,10 @@ pub struct ResultDetails {
     #[serde(default)]
     pub tied: Option<bool>,
     pub scaling: Option<Scaling>,
+    /// A hitch's cylinder (centre, axis, radius, length; m), for viewers;
+    /// none for a knot without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cylinder: Option<solver::contact::Cylinder>,
 }
 
 impl From<&CaseReport> for ResultDetails {
@@ -54,6 +58,7 @@ impl From<&CaseReport> for ResultDetails {
             holding_force_bar: report.holding_force_bar,
             tied: report.tied,
             scaling: report.scaling,
+            cylinder: report.cylinder,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! (the paper's method): free velocities from the start-of-step state and the
 //! contact problem on the lumped mass, solved by block Gauss-Seidel.
 use super::{World, WorldError, WorldStepReport};
-use crate::contact::{Geometry, MassProblem, SpinDofs};
+use crate::contact::{MassProblem, SpinDofs};
 use crate::energies::{self, Terms};
 use crate::external;
 use crate::rod::{node_dof, theta_dof};
@@ -64,47 +64,19 @@ impl World {
             }),
             dt,
         };
-        if let Ok(dir) = std::env::var("KS_DUMP") {
-            if self.counters.steps % 250 == 0 {
-                let json = serde_json::json!({
-                    "contacts": &self.contacts, "inv_mass": &self.inv_mass, "v_free": &self.v_free,
-                    "dt": dt, "warm": &self.warm,
-                });
-                std::fs::write(format!("{dir}/p{}.json", self.counters.steps), json.to_string()).unwrap();
-            }
-        }
-        let accelerated = self.contact.geometry == Geometry::Smooth
-            && std::env::var("KS_CONTACT_ITER").map_or(true, |v| v != "gs");
-        let sol = if accelerated {
-            self.apgd
-                .solve_problem(&problem, &self.contact.solver, Some(&self.warm))?
-        } else {
-            let mut o = self.contact.solver;
-            if let Ok(v) = std::env::var("KS_MAX_SWEEPS") { o.max_sweeps = v.parse().unwrap(); }
-            if let Ok(v) = std::env::var("KS_OMEGA") { o.relaxation = v.parse().unwrap(); }
-            self.gauss_seidel
-                .solve_problem(&problem, &o, Some(&self.warm))?
-        };
+        let sol = self
+            .gauss_seidel
+            .solve_problem(&problem, &self.contact.solver, Some(&self.warm))?;
         report.contact_sweeps = sol.sweeps;
         report.contact_residual = sol.residual;
-        let (forces, node_forces, torques) = if accelerated {
-            (
-                self.apgd.contact_forces(),
-                self.apgd.node_forces(),
-                self.apgd.spin_torques(),
-            )
-        } else {
-            (
-                self.gauss_seidel.contact_forces(),
-                self.gauss_seidel.node_forces(),
-                self.gauss_seidel.spin_torques(),
-            )
-        };
-        report.active_contacts = forces
+        report.active_contacts = self
+            .gauss_seidel
+            .contact_forces()
             .iter()
             .zip(&self.contacts)
             .filter(|(f, c)| f.dot(&c.normal) > 0.0)
             .count();
+        let node_forces = self.gauss_seidel.node_forces();
         for (rod, body) in self.rods.iter().zip(&mut self.bodies) {
             let off = body.first_node;
             for i in 0..rod.nodes() {
@@ -114,12 +86,13 @@ impl World {
                 }
             }
             if self.contact.rolling {
+                let torques = self.gauss_seidel.spin_torques();
                 for e in 0..rod.edges() {
                     body.force[theta_dof(e)] += torques[body.first_edge + e];
                 }
             }
         }
-        self.forces.extend_from_slice(forces);
+        self.forces.extend_from_slice(self.gauss_seidel.contact_forces());
         self.history.push(&self.pair_ids, &self.forces, dt);
         Ok(())
     }

@@ -24,7 +24,6 @@ mod warm_start;
 pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use crate::contact::curve::CurvePair;
-use crate::contact::apgd::Apgd;
 use crate::contact::gauss_seidel::GaussSeidel;
 use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve};
 use crate::counters::Counters;
@@ -83,8 +82,6 @@ pub struct World {
     spin_free: Vec<f64>,
     broad: BroadPhase,
     gauss_seidel: GaussSeidel,
-    /// The smooth geometry's solve ([`crate::contact::apgd`]).
-    apgd: Apgd,
     segments: Vec<Segment>,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
@@ -169,7 +166,6 @@ impl World {
             spin_free: vec![0.0; total_edges],
             broad: BroadPhase::new(),
             gauss_seidel: GaussSeidel::new(),
-            apgd: Apgd::new(),
             segments: Vec::new(),
             curves: Vec::new(),
             merge_keep: Vec::new(),

@@ -45,8 +45,10 @@ const GROW: f64 = 2.0;
 
 /// Iterations between updates of the friction bounds `mu r_n` (the outer
 /// loop of a Tresca fixed point, under which each inner problem is convex).
-/// Of 10, 40, 100 and 250, 100 took the fewest products to the tolerance on
-/// states of n = 3's smooth pull (docs/FIDELITY.md, "Contact geometry").
+/// On contact problems saved from n = 3's smooth pull (docs/FIDELITY.md, "The
+/// contact solve on overlapping rows"), 10 and 40 left many short of 1e-6
+/// after 5 000 products, 100 one in twenty and 250 none; 100 renews the bounds
+/// once within the cases' cap of 200.
 const BOUNDS_EVERY: usize = 100;
 
 /// Solver state; buffers are reused, so a solve allocates nothing once they

@@ -11,10 +11,10 @@
 //! block (a Jacobi preconditioner) and `t = 1 / L` found by backtracking on
 //! `f`'s quadratic bound in the metric `1 / s`. `P_c` is Signorini's
 //! half-line times a disk of fixed radius `g_c` (Tresca's law,
-//! [`project_tresca`]), a convex set, so between updates of the bounds this
+//! `project_tresca`), a convex set, so between updates of the bounds this
 //! is FISTA on a convex quadratic, whose iterations grow with the square root
 //! of `W`'s condition number where Gauss-Seidel's grow with it. Every
-//! [`BOUNDS_EVERY`] iterations the bounds become `g_c = mu r_n` of the
+//! `BOUNDS_EVERY` (100) iterations the bounds become `g_c = mu r_n` of the
 //! current iterate and the momentum restarts (the outer loop of a Tresca
 //! fixed point); Coulomb's law itself (eq. 9) is not a projection on a convex
 //! set, and Nesterov steps with its projection

@@ -1,11 +1,13 @@
 //! Contact benchmarks (Sec. 3.2): broad phase on a tight knotted rod and a
-//! Gauss-Seidel solve of its ~100 contacts.
+//! Gauss-Seidel solve of its ~100 contacts, beside the accelerated projected
+//! gradient (APGD) on the same problems.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector3;
+use solver::contact::apgd::Apgd;
 use solver::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use solver::contact::gauss_seidel::GaussSeidel;
-use solver::contact::{ContactPoint, GaussSeidelOptions};
+use solver::contact::{ContactPoint, GaussSeidelOptions, MassProblem};
 use std::f64::consts::TAU;
 use std::hint::black_box;
 
@@ -94,8 +96,9 @@ fn line_contact(m: usize) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
     (contacts, vec![1.0; 2 * (m + 1)], v_free)
 }
 
-/// Cold solves to 1e-8 with plain Gauss-Seidel and with the default
-/// over-relaxation; prints the sweeps each needs.
+/// Cold solves to 1e-8 with plain Gauss-Seidel, with the default
+/// over-relaxation and with APGD; prints the sweeps (APGD: products `W r`)
+/// each needs.
 fn bench_solve(
     c: &mut Criterion,
     gs: &mut GaussSeidel,
@@ -135,6 +138,26 @@ fn bench_solve(
             })
         });
     }
+    let options = GaussSeidelOptions {
+        max_sweeps: 10_000,
+        tolerance: 1e-8,
+        ..Default::default()
+    };
+    let problem = MassProblem {
+        contacts,
+        inv_mass,
+        v_free,
+        spin: None,
+        dt: 1e-3,
+    };
+    let mut apgd = Apgd::new();
+    let report = apgd
+        .solve_problem(&problem, &options, None)
+        .expect("valid contacts");
+    println!("{name}, {} contacts, APGD: {report:?}", contacts.len());
+    c.bench_function(&format!("apgd/{name}_{}_contacts", contacts.len()), |b| {
+        b.iter(|| black_box(apgd.solve_problem(black_box(&problem), &options, None)))
+    });
 }
 
 criterion_group!(benches, bench_contact);

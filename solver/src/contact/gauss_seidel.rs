@@ -23,7 +23,7 @@ use nalgebra::Vector3;
 /// One contact's row of the solve, packed so that a sweep reads each
 /// contact's data from one place.
 #[derive(Debug, Clone, Copy)]
-struct Row {
+pub(super) struct Row {
     nodes: [usize; CONTACT_NODES],
     weights: [f64; CONTACT_NODES],
     /// Velocity change of each node per unit force, `dt inv_mass_k w_ck`.
@@ -34,21 +34,21 @@ struct Row {
     spin_edges: [usize; 2],
     spin_levers: [Vector3<f64>; 2],
     spin_push: [f64; 2],
-    frame: ContactFrame,
+    pub(super) frame: ContactFrame,
     /// Inverse of the normal entry `w_c` of the diagonal block of `W` (the
     /// isotropic part: levers are tangent); 0 when `w_c = 0` (both bodies
     /// fixed: the contact cannot act).
-    inv_w_n: f64,
+    pub(super) inv_w_n: f64,
     /// Inverse of the largest eigenvalue of the block's tangential part
     /// (`w_c` plus the rank-two spin terms); `inv_w_n` without levers.
-    inv_w_t: f64,
-    mu: f64,
+    pub(super) inv_w_t: f64,
+    pub(super) mu: f64,
     /// `sliding_direction` in the local frame (zero normal component).
-    sliding: Vector3<f64>,
+    pub(super) sliding: Vector3<f64>,
     /// Local relative velocity of the free step, gap term included.
-    free: Vector3<f64>,
+    pub(super) free: Vector3<f64>,
     /// Local contact force `r_c = (r_n, r_t1, r_t2)`.
-    r: Vector3<f64>,
+    pub(super) r: Vector3<f64>,
 }
 
 impl Row {
@@ -56,7 +56,7 @@ impl Row {
     /// DOFs' `spin`, rolling) over a step `dt`, its force `warm` or zero
     /// (zero too when the contact cannot act); `close_gap` as in
     /// [`GaussSeidelOptions::close_gap`].
-    fn new(
+    pub(super) fn new(
         contact: &ContactPoint,
         inv_mass: &[f64],
         v_free: &[Vector3<f64>],
@@ -104,7 +104,7 @@ impl Row {
 
     /// Current local relative velocity `u_c` given the velocity corrections.
     #[inline(always)]
-    fn velocity(&self, dv: &[Vector3<f64>], dspin: &[f64]) -> Vector3<f64> {
+    pub(super) fn velocity(&self, dv: &[Vector3<f64>], dspin: &[f64]) -> Vector3<f64> {
         let mut g = self.weights[0] * dv[self.nodes[0]];
         for k in 1..self.width {
             g += self.weights[k] * dv[self.nodes[k]];
@@ -118,7 +118,7 @@ impl Row {
 
     /// Adds the velocity changes caused by the local force change `dr`.
     #[inline(always)]
-    fn push(&self, dr: &Vector3<f64>, dv: &mut [Vector3<f64>], dspin: &mut [f64]) {
+    pub(super) fn push(&self, dr: &Vector3<f64>, dv: &mut [Vector3<f64>], dspin: &mut [f64]) {
         let f = self.frame.to_world(dr);
         for k in 0..self.width {
             dv[self.nodes[k]] += self.push[k] * f;
@@ -141,13 +141,27 @@ impl Row {
     /// (as `u` is affine in `r` with slope `w_c I` without levers); `omega`
     /// times the inverse block entries over-relaxes it.
     #[inline(always)]
-    fn update(&self, u: &Vector3<f64>, rho_n: f64, rho_t: f64) -> Vector3<f64> {
+    pub(super) fn update(&self, u: &Vector3<f64>, rho_n: f64, rho_t: f64) -> Vector3<f64> {
         let y = Vector3::new(
             self.r.x - rho_n * u.x,
             self.r.y - rho_t * u.y,
             self.r.z - rho_t * u.z,
         );
         project_coulomb(&y, self.mu, &self.sliding)
+    }
+
+    /// Natural-map residual of the force `r` at the local velocity `u`,
+    /// `|| r - P_K(r - u_hat / w_c) ||` (with a sliding direction,
+    /// `|| r - P(r - u / w_c) ||`, zero exactly at the fixed point of eq.
+    /// 10's local update).
+    #[inline]
+    pub(super) fn residual(&self, r: &Vector3<f64>, u: &Vector3<f64>) -> f64 {
+        if self.sliding == Vector3::zeros() {
+            natural_map_residual(r, u, self.mu, self.inv_w_t)
+        } else {
+            let y = r - self.inv_w_t * u;
+            (r - project_coulomb(&y, self.mu, &self.sliding)).norm()
+        }
     }
 }
 
@@ -298,44 +312,63 @@ impl GaussSeidel {
     /// The rows' forces in world coordinates, per contact, summed per node
     /// and as torques per edge (of `nodes` nodes and `edges` spinning edges).
     fn collect_forces(&mut self, nodes: usize, edges: usize) {
-        self.forces.clear();
-        self.node_forces.clear();
-        self.node_forces.resize(nodes, Vector3::zeros());
-        self.spin_torques.clear();
-        self.spin_torques.resize(edges, 0.0);
-        for row in &self.rows {
-            let force = row.frame.to_world(&row.r);
-            for (&k, &wk) in row.nodes.iter().zip(&row.weights).take(row.width) {
-                self.node_forces[k] += wk * force;
-            }
-            for k in 0..2 {
-                if row.spin_push[k] != 0.0 {
-                    self.spin_torques[row.spin_edges[k]] += row.spin_levers[k].dot(&force);
-                }
-            }
-            self.forces.push(force);
-        }
+        collect_forces(
+            &self.rows,
+            (nodes, edges),
+            &mut self.forces,
+            &mut self.node_forces,
+            &mut self.spin_torques,
+        );
     }
 
-    /// Natural-map residual of the current iterate, `max_c || r_c - P_K(r_c -
-    /// u_hat_c / w_c) ||` (with a sliding direction, `|| r_c - P(r_c - u_c / w_c) ||`
-    /// for eq. 10's projection) over `max_c |r_c|`, skipping contacts with `w_c = 0`
-    /// (they cannot act).
+    /// Natural-map residual of the current iterate ([`residual`]).
     fn residual(&self) -> f64 {
-        let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
-        for row in self.rows.iter().filter(|row| row.inv_w_n > 0.0) {
-            let u = row.velocity(&self.dv, &self.dspin);
-            let residual = if row.sliding == Vector3::zeros() {
-                natural_map_residual(&row.r, &u, row.mu, row.inv_w_t)
-            } else {
-                // Eq. (10) along `t`: zero exactly at the fixed point of the local update.
-                (row.r - row.update(&u, row.inv_w_t, row.inv_w_t)).norm()
-            };
-            max_residual = max_residual.max(residual);
-            max_force = max_force.max(row.r.norm());
-        }
-        max_residual / max_force.max(f64::MIN_POSITIVE)
+        residual(&self.rows, &self.dv, &self.dspin)
     }
+}
+
+/// The rows' forces in world coordinates, per contact (`forces`), summed
+/// per node (`node_forces`) and as torques per edge (`spin_torques`), for a
+/// world of `(nodes, edges)` nodes and spinning edges.
+pub(super) fn collect_forces(
+    rows: &[Row],
+    (nodes, edges): (usize, usize),
+    forces: &mut Vec<Vector3<f64>>,
+    node_forces: &mut Vec<Vector3<f64>>,
+    spin_torques: &mut Vec<f64>,
+) {
+    forces.clear();
+    node_forces.clear();
+    node_forces.resize(nodes, Vector3::zeros());
+    spin_torques.clear();
+    spin_torques.resize(edges, 0.0);
+    for row in rows {
+        let force = row.frame.to_world(&row.r);
+        for (&k, &wk) in row.nodes.iter().zip(&row.weights).take(row.width) {
+            node_forces[k] += wk * force;
+        }
+        for k in 0..2 {
+            if row.spin_push[k] != 0.0 {
+                spin_torques[row.spin_edges[k]] += row.spin_levers[k].dot(&force);
+            }
+        }
+        forces.push(force);
+    }
+}
+
+/// Natural-map residual of the rows' forces `r` with the velocity
+/// corrections `dv` and `dspin`: `max_c || r_c - P_K(r_c - u_hat_c / w_c) ||`
+/// (with a sliding direction, `|| r_c - P(r_c - u_c / w_c) ||` for eq. 10's
+/// projection) over `max_c |r_c|`, skipping contacts with `w_c = 0` (they
+/// cannot act).
+pub(super) fn residual(rows: &[Row], dv: &[Vector3<f64>], dspin: &[f64]) -> f64 {
+    let (mut max_force, mut max_residual) = (0.0f64, 0.0f64);
+    for row in rows.iter().filter(|row| row.inv_w_n > 0.0) {
+        let residual = row.residual(&row.r, &row.velocity(dv, dspin));
+        max_residual = max_residual.max(residual);
+        max_force = max_force.max(row.r.norm());
+    }
+    max_residual / max_force.max(f64::MIN_POSITIVE)
 }
 
 /// The contacts that can act (`w_c > 0`, stored as `inv_w_n > 0`), evens first, then odds. Contacts
@@ -402,7 +435,7 @@ fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
     sum
 }
 
-fn validate(
+pub(super) fn validate(
     contacts: &[ContactPoint],
     inv_mass: &[f64],
     v_free: &[Vector3<f64>],
@@ -464,7 +497,7 @@ fn validate(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::contact::broad_phase::polyline_segments;
     use crate::contact::broad_phase::tests::torus_knot;
@@ -478,7 +511,12 @@ mod tests {
 
     /// Contact between segments `(nodes[0], nodes[1])` (A) and
     /// `(nodes[2], nodes[3])` (B) of the node array `x`.
-    fn contact(x: &[Vector3<f64>], nodes: [usize; 4], contact_distance: f64, mu: f64) -> ContactPoint {
+    pub(crate) fn contact(
+        x: &[Vector3<f64>],
+        nodes: [usize; 4],
+        contact_distance: f64,
+        mu: f64,
+    ) -> ContactPoint {
         let pair = closest_points(&x[nodes[0]], &x[nodes[1]], &x[nodes[2]], &x[nodes[3]]);
         ContactPoint::from_pair(nodes, &pair, contact_distance, mu).unwrap()
     }
@@ -639,7 +677,7 @@ mod tests {
 
     /// Ground segment (fixed, nodes 0-1) with three free segments stacked on
     /// it, alternately along x and y, under gravity with random sliding.
-    fn stack(rng: &mut StdRng, mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
+    pub(crate) fn stack(rng: &mut StdRng, mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
         let r = 0.05;
         let mut x = Vec::new();
         for level in 0..4 {
@@ -749,7 +787,7 @@ mod tests {
 
     /// Contacts of an open tight (2, 7) torus knot (301 nodes, unit inverse masses)
     /// whose nodes move towards the knot's axis.
-    fn knot_problem(mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
+    pub(crate) fn knot_problem(mu: f64) -> (Vec<ContactPoint>, Vec<f64>, Vec<Vector3<f64>>) {
         let (radius, margin) = (0.25, 0.02);
         let x = torus_knot(2.0, 7.0, 1.5, 0.5, 301, 0.9);
         let segments = polyline_segments(&x, radius, 0);

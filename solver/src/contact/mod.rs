@@ -1,8 +1,10 @@
 //! Frictional contact between rods (paper Sec. 3.2): the data model
 //! ([`point`], [`problem`], [`options`], [`report`], [`error`]), detection
 //! ([`broad_phase`], [`segment`] or the smooth [`curve`], [`narrow_phase`]), the friction cone
-//! ([`cone`]), a rigid obstacle ([`cylinder`]) and the two solvers ([`gauss_seidel`] on the lumped mass,
+//! ([`cone`]), a rigid obstacle ([`cylinder`]) and the solvers ([`gauss_seidel`] and [`apgd`] on the lumped
+//! mass,
 //! [`dense`] on a dense Delassus operator).
+pub mod apgd;
 pub mod broad_phase;
 pub mod cone;
 pub mod curve;

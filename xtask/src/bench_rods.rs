@@ -752,7 +752,8 @@ fn map(binary: &Path, name: &str, axes: &Axes, args: &Args, dir: &Path) -> Resul
         doc,
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
-    let (mut worst_restarts, mut worst_cost, mut worst_deviation, mut worst_own) = (0, 0.0f64, 0.0f64, 0.0f64);
+    let (mut worst_restarts, mut worst_cost, mut worst_deviation, mut worst_own) =
+        (0, 0.0f64, 0.0f64, 0.0f64);
     let (mut none, mut unclean, mut both_none) = (0, 0, 0);
     for (i, (c, m)) in cases.iter().zip(adaptive).enumerate() {
         let r = &m.report;
@@ -780,7 +781,12 @@ fn map(binary: &Path, name: &str, axes: &Axes, args: &Args, dir: &Path) -> Resul
                     _ => "one none".to_string(),
                 };
                 let both = ours.is_none() && theirs.is_none();
-                (theirs.map_or("none".to_string(), |l| format!("{l:.2}")), text, deviation, both)
+                (
+                    theirs.map_or("none".to_string(), |l| format!("{l:.2}")),
+                    text,
+                    deviation,
+                    both,
+                )
             }
             None => ("-".to_string(), "-".to_string(), None, false),
         };

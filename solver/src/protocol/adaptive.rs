@@ -4,7 +4,8 @@
 //! the sliding along the rod (`external::sliding`), with steps up to
 //! `FAST_DT_FACTOR` times the case's and a checkpoint every
 //! `CHECKPOINT_SPACING` in l_k bar. When an event is detected the stage goes
-//! back to the checkpoint `RESTART_BEFORE` before it, lets the knot settle
+//! back to the checkpoint `RESTART_BEFORE` before it (more for an overhand
+//! knot of more than `RESTART_TURNS` turns), lets the knot settle
 //! with the clamps held, and moves through the event at `pull_speed` with the
 //! case's damping and step (the snap phase), fast again from `SLOW_AFTER`
 //! past it. Each phase of this schedule is a [`Phase`].
@@ -68,9 +69,9 @@ pub(super) const CHECKPOINT_SPACING: f64 = 2.0;
 pub(super) const RESTART_BEFORE: f64 = 8.0;
 /// An overhand knot of more turns restarts `RESTART_BEFORE` times n /
 /// `RESTART_TURNS` before: its fast pull lags by more, about n (the loop is
-/// longer; the nylon line of L/h 625, n = 6, mu = 0.05 snapped 10 late, so
-/// that 8 before restarted past the reference pull's fold and inverted 1.6 %
-/// after it, BENCHMARKS.md, "Any rod, the rest").
+/// longer; the nylon line of L/h 625, n = 6, mu = 0.05 snapped at least 10
+/// late, so that 8 before restarted past the reference pull's fold and
+/// inverted 1.6 % after it, BENCHMARKS.md, "Any rod, the rest").
 const RESTART_TURNS: f64 = 3.0;
 /// How far (l_k bar) before the fast release's flip back the slow release
 /// restarts: the fast release sees it later than the fast pull its snap (n = 4

@@ -4,7 +4,8 @@
 //! the sliding along the rod (`external::sliding`), with steps up to
 //! `FAST_DT_FACTOR` times the case's and a checkpoint every
 //! `CHECKPOINT_SPACING` in l_k bar. When an event is detected the stage goes
-//! back to the checkpoint `RESTART_BEFORE` before it, lets the knot settle
+//! back to the checkpoint `RESTART_BEFORE` before it (more for an overhand
+//! knot of more than `RESTART_TURNS` turns), lets the knot settle
 //! with the clamps held, and moves through the event at `pull_speed` with the
 //! case's damping and step (the snap phase), fast again from `SLOW_AFTER`
 //! past it. Each phase of this schedule is a [`Phase`].
@@ -60,11 +61,18 @@ pub(super) const FAST_DT_FACTOR: f64 = 4.0;
 pub(super) const CHECKPOINT_SPACING: f64 = 2.0;
 /// How far (l_k bar) before the fast pull's event the slow pull restarts (the
 /// fast pull snaps late: n = 3 by 3, n = 5 by 5), and how much further back
-/// each retry goes. The slow pull needs a few l_k bar to take over from the
+/// each retry goes, for an overhand knot of up to `RESTART_TURNS` turns and
+/// any other knot. The slow pull needs a few l_k bar to take over from the
 /// settled state: restarting 6 before moved n = 3's inversion by -0.65 % and
 /// n = 5's by -0.91 %, 8 before n = 3's by -0.17 % (CHANGELOG.md, physics
 /// revision 7).
 pub(super) const RESTART_BEFORE: f64 = 8.0;
+/// An overhand knot of more turns restarts `RESTART_BEFORE` times n /
+/// `RESTART_TURNS` before: its fast pull lags by more, about n (the loop is
+/// longer; the nylon line of L/h 625, n = 6, mu = 0.05 snapped at least 10
+/// late, so that 8 before restarted past the reference pull's fold and
+/// inverted 1.6 % after it, BENCHMARKS.md, "Any rod, the rest").
+const RESTART_TURNS: f64 = 3.0;
 /// How far (l_k bar) before the fast release's flip back the slow release
 /// restarts: the fast release sees it later than the fast pull its snap (n = 4
 /// flips back at 226.5 under the reference release, where the fast one saw it
@@ -252,10 +260,11 @@ impl Way {
         if self.0 > 0.0 { l - d } else { l + d }
     }
 
-    /// How far before an event the slow phase restarts.
-    pub(super) fn restart_before(self) -> f64 {
+    /// How far before an event the slow phase restarts, for an overhand
+    /// knot of `turns` (`None`: another knot).
+    pub(super) fn restart_before(self, turns: Option<u32>) -> f64 {
         if self.0 > 0.0 {
-            RESTART_BEFORE
+            RESTART_BEFORE * turns.map_or(1.0, |n| (f64::from(n) / RESTART_TURNS).max(1.0))
         } else {
             RELEASE_RESTART_BEFORE
         }
@@ -419,6 +428,32 @@ mod tests {
         assert!((stretch_factor(&pulled(0.0), 4375.0) - 1.0).abs() < 1e-12);
         assert_eq!(stretch_factor(&pulled(7e-4), 4375.0), STRETCH_CAP);
         assert_eq!(stretch_factor(&rising[..3], 4375.0), 1.0);
+    }
+
+    /// The restart window covers the fast pull's lag as measured (the knot's
+    /// own length): the nylon line of L/h 625, n = 6, mu = 0.05, restarted 8
+    /// before its fast pull's snap at the checkpoint of 352.5, past the
+    /// reference pull's fold at 354.5 (so that the snap was at 344.5 at the
+    /// latest). Twice that window restarts, even from the checkpoint one
+    /// spacing nearer, `MIN_LEAD` before the fold. The paper's rod (n = 3)
+    /// and n = 2 keep `RESTART_BEFORE` to the bit (their paths unchanged), a
+    /// release and other knots their own windows.
+    #[test]
+    fn the_restart_window_grows_with_the_fast_pulls_lag() {
+        let (tighten, loosen) = (Way(1.0), Way(-1.0));
+        let (fast, fold) = (352.5 - RESTART_BEFORE, 354.5);
+        assert!(tighten.back(fast, RESTART_BEFORE) < fold);
+        let restart = tighten.back(fast, tighten.restart_before(Some(6)));
+        assert!(restart - CHECKPOINT_SPACING >= fold + MIN_LEAD, "{restart}");
+        for n in [1, 2, 3] {
+            assert_eq!(
+                tighten.restart_before(Some(n)).to_bits(),
+                RESTART_BEFORE.to_bits()
+            );
+        }
+        assert_eq!(tighten.restart_before(None), RESTART_BEFORE);
+        assert_eq!(tighten.restart_before(Some(6)), 2.0 * RESTART_BEFORE);
+        assert_eq!(loosen.restart_before(Some(6)), RELEASE_RESTART_BEFORE);
     }
 
     /// Checkpoints are found back along the stage, either way.

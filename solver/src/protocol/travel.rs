@@ -152,7 +152,7 @@ impl Case<'_> {
         };
         let held = slip.at.l_k_arc_bar;
         if travel.phase == Phase::Approach {
-            let back = travel.way.back(held, travel.way.restart_before());
+            let back = travel.way.back(held, travel.way.restart_before(self.turns()));
             if self.restart(travel, saved, back, Some(held), Outcome::Restarted)? {
                 return Ok(true);
             }
@@ -193,7 +193,7 @@ impl Case<'_> {
         let way = travel.way;
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
-                let back = way.back(began, way.restart_before());
+                let back = way.back(began, way.restart_before(self.turns()));
                 if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
                     return Ok(true);
                 }
@@ -201,7 +201,7 @@ impl Case<'_> {
         }
         match (travel.phase, travel.event) {
             (Phase::Approach, Some(event)) => {
-                let (at, back) = (event.at.l_k_arc_bar, way.restart_before());
+                let (at, back) = (event.at.l_k_arc_bar, way.restart_before(self.turns()));
                 if self.restart(travel, saved, way.back(at, back), Some(at), Outcome::Restarted)? {
                     return Ok(true);
                 }
@@ -217,7 +217,7 @@ impl Case<'_> {
                 // The slow phase met its event right after its restart: the
                 // restart was already past the fold. Go back further.
                 let (back, fast) = (
-                    way.back(travel.phase_start_arc, way.restart_before()),
+                    way.back(travel.phase_start_arc, way.restart_before(self.turns())),
                     travel.fast_event,
                 );
                 if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
@@ -298,6 +298,12 @@ impl Case<'_> {
         }
         travel.reviewed = true;
         Ok(true)
+    }
+
+    /// The overhand knot's turns, which scale its restart window
+    /// ([`Way::restart_before`]); `None` for other knots.
+    fn turns(&self) -> Option<u32> {
+        (self.params.knot == KnotKind::Overhand).then_some(self.params.n)
     }
 
     /// The state to come back to.

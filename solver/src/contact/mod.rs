@@ -2,8 +2,7 @@
 //! ([`point`], [`problem`], [`options`], [`report`], [`error`]), detection
 //! ([`broad_phase`], [`segment`] or the smooth [`curve`], [`narrow_phase`]), the friction cone
 //! ([`cone`]), a rigid obstacle ([`cylinder`]) and the solvers ([`gauss_seidel`] and [`apgd`] on the lumped
-//! mass,
-//! [`dense`] on a dense Delassus operator).
+//! mass, [`dense`] on a dense Delassus operator).
 pub mod apgd;
 pub mod broad_phase;
 pub mod cone;

@@ -1,7 +1,7 @@
 //! Bends: two rods tied loose and contact-free, their diagrams told apart by
 //! their crossings, their symmetry, and the case parameters that choose them.
 use nalgebra::Vector3;
-use solver::case::{CaseParams, KnotKind};
+use solver::case::{CaseParams, InitialShape, KnotKind};
 use solver::knot::{Bend, BendSpec, StartShape};
 use solver::rod::End;
 
@@ -238,4 +238,29 @@ fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
         .any(|e| e.kind == solver::protocol::EventKind::SlipThrough);
     assert_eq!(report.tied, Some(!slipped));
     assert!(report.alexander_initial.is_none() && report.determinant_final.is_none());
+}
+
+/// docs/validation/starts/reef.json, the start shape docs/API.md's command
+/// reads, is the builder's reef at the defaults written out: read back, it
+/// is the same start (`UPDATE_DOCS=1` rewrites it).
+#[test]
+fn documented_reef_start_is_the_builders() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/validation/starts/reef.json");
+    let params = CaseParams {
+        knot: KnotKind::Reef,
+        ..CaseParams::default()
+    };
+    let built = params.validated().unwrap();
+    if std::env::var_os("UPDATE_DOCS").is_some() {
+        let text = serde_json::to_string(&InitialShape::from(built.start())).unwrap();
+        std::fs::write(&path, text + "\n").unwrap();
+    }
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let read = CaseParams {
+        initial_shape: Some(serde_json::from_str(&text).unwrap()),
+        ..params
+    }
+    .validated()
+    .unwrap();
+    assert_eq!(read.start(), built.start());
 }

@@ -156,9 +156,10 @@ def run(
     *,
     progress: bool | Callable[[Progress], Any] | None = None,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "clove_hitch"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
+    cylinder_radius: float | None = None,
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,
@@ -212,8 +213,14 @@ def run(
           "granny", "thief" and "grief" tie two rods of length L together, pull their standing ends apart with
           the tails free until tight (max_force_bar, default 0.05) or until the rods slip apart, and report
           whether the rods still hold each other and the holding force (the largest F bar before they part),
-          with l_k bar = (2L - the pulled clamps' distance) / h. Range: "overhand" or "figure_eight" or
-          "braid" or "reef" or "granny" or "thief" or "grief". Default: "overhand". Paper: "overhand".
+          with l_k bar = (2L - the pulled clamps' distance) / h. "clove_hitch" ties the rod round a rigid,
+          fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls its two ends
+          apart, away from the cylinder, until the hitch has set (F bar 0.025), lets the tail go with a weight
+          of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default 0.05) or until
+          the rod slips round the cylinder (less than one and a half turns left on it): tied and
+          holding_force_bar as for a bend, l_k bar = (L - the standing end's distance from where the tail was
+          held) / h; the report carries the cylinder. Range: "overhand" or "figure_eight" or "braid" or "reef"
+          or "granny" or "thief" or "grief" or "clove_hitch". Default: "overhand". Paper: "overhand".
       n: Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).
           Range: integer in 1..=8. Default: 3.
       braid_word: The braid whose closure knot "braid" ties: generators s1 ... s4 (s_i crosses strands i and i
@@ -222,6 +229,10 @@ def run(
           knot (one component). "s1 s1 s1" is the trefoil, "s1 s2^-1 s1 s2^-1" the figure-eight. Range: null
           or a braid word such as "s1 s2^-1 s1 s2^-1" (generators s1 ... s4). null: no braid: for every knot
           but "braid". Default: null.
+      cylinder_radius (m): Radius R of the rigid, fixed cylinder (a pole, its axis z through the origin) that
+          knot "clove_hitch" is tied round; other knots have none (leave it out). At most L/20: the rod must
+          wrap it twice and keep its ends. Range: null or (0, L/20] m. null: for "clove_hitch", 10 h; no
+          cylinder for the other knots. Default: null.
       start_twist (turns): Twist the knot starts with between its clamps, spread evenly along the rod; 0:
           none, as if the knot's ends had turned freely while it was tied. The report gives the twist used and
           the knot's writhe; docs/VALIDATION.md ("Sensitivity") the inversions with and without it. Range:
@@ -361,9 +372,10 @@ def run(
 def validate(
     *,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "clove_hitch"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
+    cylinder_radius: float | None = None,
     start_twist: float | None = None,
     end_to_end: float | None = None,
     braid_length: float | None = None,

@@ -326,6 +326,12 @@ async fn a_bends_rods_are_drawn_each_in_its_colour() {
         )
         .await;
     assert!(hint.as_str().unwrap().contains("rod 2 orange"), "{hint}");
+    // The parameters line names the knot, not an overhand's n.
+    let held = browser
+        .js("return document.querySelector('#held').textContent", json!([]))
+        .await;
+    let held = held.as_str().unwrap();
+    assert!(held.contains("reef") && !held.contains("n = "), "{held}");
     browser.screenshot("bend").await;
     server.shutdown().await.unwrap();
 }

@@ -7,6 +7,12 @@ import { overlay } from "./plot.js";
 import { KnotView } from "./knot3d.js";
 import { program, stageCurves, stageKind, direction } from "./stages.js";
 
+/** The parameters that say which knot a case ties: n for the overhand, the knot's name (and its word or pole) for any other. */
+const knotKeys = (p) =>
+  !p.knot || p.knot === "overhand"
+    ? ["n"]
+    : ["knot", ...(p.knot === "braid" ? ["braid_word"] : []), ...(p.knot === "clove_hitch" ? ["cylinder_radius"] : [])];
+
 /** A stage's given fields as text (" to_l_k_bar 120"), its null ones left out. */
 const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
   .filter(([, v]) => v !== null && v !== undefined).map(([k, v]) => ` ${esc(k)} ${esc(v)}`).join(",");
@@ -42,7 +48,7 @@ export async function casePage(main, id) {
       ${r && r.reason ? `<strong>${esc(r.reason)}</strong>` : c.last_error ? `<strong>${esc(c.last_error)}</strong>` : ""}
       ${inv ? ` · inversion at ${LK} ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), ${FB} ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, ${HB} ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r ? " · no inversion" : ""}
       ${r ? ` · ${duration(r.wall_time)} on ${esc(r.worker)}` : ` · progress ${fmt(100 * c.progress, 0)} %`}</p>
-    <p class="hint" id="held">${esc(["n", "h", "mu", "length", "youngs_modulus", "density", "poisson_ratio"].map((k) => param(k, p[k], props)).join(", "))},
+    <p class="hint" id="held">${esc([...knotKeys(p), "h", "mu", "length", "youngs_modulus", "density", "poisson_ratio"].map((k) => param(k, p[k], props)).join(", "))},
       K = ${c.nodes} nodes${p.nodes === null ? " (the default for this rod)" : ""}; attempts ${c.attempts} of ${c.max_attempts}</p>
     ${quasi && quasi.holds === false ? `<p class="warning" id="not-quasi-static" role="note">Not quasi-static: the kinetic energy was ${fmt(quasi.kinetic_ratio, 4)} of the elastic energy
       (median before each event), over the limit of ${fmt(quasi.limit, 4)}. The pull was too fast for this rod: its curves carry inertia; lower pull_speed or keep mass_scaling (docs/API.md, "Loading programs").</p>` : ""}

@@ -332,6 +332,15 @@ async fn a_bends_rods_are_drawn_each_in_its_colour() {
         .await;
     let held = held.as_str().unwrap();
     assert!(held.contains("reef") && !held.contains("n = "), "{held}");
+    // The status line gives the bend's holding force, not "no inversion".
+    let status = browser
+        .js("return document.querySelector('#case p').textContent", json!([]))
+        .await;
+    let status = status.as_str().unwrap();
+    assert!(
+        status.contains("holding force") && !status.contains("no inversion"),
+        "{status}"
+    );
     browser.screenshot("bend").await;
     server.shutdown().await.unwrap();
 }

@@ -42,11 +42,14 @@ export async function casePage(main, id) {
   const firstEvent = events[0];
   // A hitch's rigid cylinder, where the result gives one.
   const cylinder = (r && ((r.summary && r.summary.cylinder) || r.cylinder)) || null;
+  // A bend's or a hitch's holding force (the largest F bar before the rods part) and whether it still holds.
+  const holding = typeof summary.holding_force_bar === "number" ? { force: summary.holding_force_bar, tied: summary.tied } : null;
   const invIndex = snapshots.findIndex((f) => about(f).at_event && (!firstEvent || about(f).event === firstEvent.kind));
   $("#case").innerHTML = `
     <p><span class="status s-${esc(c.status)}">${esc(c.status)}</span>
       ${r && r.reason ? `<strong>${esc(r.reason)}</strong>` : c.last_error ? `<strong>${esc(c.last_error)}</strong>` : ""}
-      ${inv ? ` · inversion at ${LK} ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), ${FB} ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, ${HB} ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r ? " · no inversion" : ""}
+      ${inv ? ` · inversion at ${LK} ${fmt(inv.l_k_bar, 2)} (l_c/L ${fmt(inv.l_c_over_L, 3)}), ${FB} ${fmt(inv.F_bar_before, 4)} → ${fmt(inv.F_bar_after, 4)}, ${HB} ${fmt(inv.H_bar_before, 3)} → ${fmt(inv.H_bar_after, 3)}` : r && !holding ? " · no inversion" : ""}
+      ${holding ? `<span id="holding"> · holding force ${FB} ${fmt(holding.force, 4)}${holding.tied === false ? ", slipped through" : holding.tied ? ", still tied" : ""}</span>` : ""}
       ${r ? ` · ${duration(r.wall_time)} on ${esc(r.worker)}` : ` · progress ${fmt(100 * c.progress, 0)} %`}</p>
     <p class="hint" id="held">${esc([...knotKeys(p), "h", "mu", "length", "youngs_modulus", "density", "poisson_ratio"].map((k) => param(k, p[k], props)).join(", "))},
       K = ${c.nodes} nodes${p.nodes === null ? " (the default for this rod)" : ""}; attempts ${c.attempts} of ${c.max_attempts}</p>

@@ -221,6 +221,37 @@ impl Browser {
     }
 }
 
+/// A browser beside a server with `workers` workers on its own database.
+struct Page {
+    browser: Browser,
+    server: knotsweep_server::RunningServer,
+    url: String,
+    c: reqwest::Client,
+    _dir: tempfile::TempDir,
+}
+
+/// A [`Page`]; `None` without chromium or chromedriver (reported by
+/// `common::missing`: skipped, or a failure when `CI` is set).
+async fn page(workers: usize) -> Option<Page> {
+    let browser = match Browser::start().await {
+        Ok(b) => b,
+        Err(why) => {
+            missing(&why);
+            return None;
+        }
+    };
+    let (_dir, db) = temp_db();
+    let server = start(config(&db, workers)).await;
+    let (url, c) = (server.url(), client());
+    Some(Page {
+        browser,
+        server,
+        url,
+        c,
+        _dir,
+    })
+}
+
 impl Drop for Browser {
     fn drop(&mut self) {
         let _ = self.driver.kill();
@@ -286,13 +317,16 @@ const ROD_PIXELS: &str = "const c = document.querySelector('#knot canvas'); \
 /// and the 3D view draws the two rods in their two colours, with a legend.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_bends_rods_are_drawn_each_in_its_colour() {
-    let browser = match Browser::start().await {
-        Ok(b) => b,
-        Err(why) => return missing(&why),
+    let Some(Page {
+        browser,
+        server,
+        url,
+        c,
+        _dir,
+    }) = page(1).await
+    else {
+        return;
     };
-    let (_dir, db) = temp_db();
-    let server = start(config(&db, 1)).await;
-    let (url, c) = (server.url(), client());
     let base = json!({"knot": "reef", "length": 0.4, "nodes": 121, "relax_time": 0.1, "pull_speed": 0.01,
         "min_l_k_bar": 100.0});
     let id = submit_sweep(&c, &url, &json!({ "base": base })).await;
@@ -347,13 +381,16 @@ async fn a_bends_rods_are_drawn_each_in_its_colour() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field_errors() {
-    let browser = match Browser::start().await {
-        Ok(b) => b,
-        Err(why) => return missing(&why),
+    let Some(Page {
+        browser,
+        server,
+        url,
+        c,
+        _dir,
+    }) = page(1).await
+    else {
+        return;
     };
-    let (_dir, db) = temp_db();
-    let server = start(config(&db, 1)).await;
-    let (url, c) = (server.url(), client());
 
     // Submit a custom sweep through the form generated from the schema.
     browser.open(&format!("{url}/#/")).await;
@@ -575,13 +612,16 @@ async fn the_page_submits_watches_plots_shows_the_knot_cancels_and_reports_field
 /// styles with its events marked.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_form_groups_parameters_picks_materials_and_edits_loading_programs() {
-    let browser = match Browser::start().await {
-        Ok(b) => b,
-        Err(why) => return missing(&why),
+    let Some(Page {
+        browser,
+        server,
+        url,
+        c,
+        _dir,
+    }) = page(1).await
+    else {
+        return;
     };
-    let (_dir, db) = temp_db();
-    let server = start(config(&db, 1)).await;
-    let (url, c) = (server.url(), client());
     browser.open(&format!("{url}/#/")).await;
     browser
         .until(
@@ -817,13 +857,16 @@ async fn sweep_uncertainties(c: &reqwest::Client, url: &str, id: i64) -> (usize,
 /// Content-Security-Policy every answer carries, without a violation.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_api_docs_render_under_the_content_security_policy() {
-    let browser = match Browser::start().await {
-        Ok(b) => b,
-        Err(why) => return missing(&why),
+    let Some(Page {
+        browser,
+        server,
+        url,
+        _dir,
+        ..
+    }) = page(0).await
+    else {
+        return;
     };
-    let (_dir, db) = temp_db();
-    let server = start(config(&db, 0)).await;
-    let url = server.url();
     browser.open(&format!("{url}/api/docs/")).await;
     let operations = browser
         .until(
@@ -852,14 +895,17 @@ async fn the_api_docs_render_under_the_content_security_policy() {
 /// fits' pages.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_page_fits_1280_pixels_shows_no_code_words_and_gives_units() {
-    let browser = match Browser::start().await {
-        Ok(b) => b,
-        Err(why) => return missing(&why),
+    let Some(Page {
+        browser,
+        server,
+        url,
+        c,
+        _dir,
+    }) = page(2).await
+    else {
+        return;
     };
     browser.size(1280, 900).await;
-    let (_dir, db) = temp_db();
-    let server = start(config(&db, 2)).await;
-    let (url, c) = (server.url(), client());
     let base = with(tiny_base(), json!({"min_l_k_bar": 105.0}));
     let id = submit_sweep(&c, &url, &json!({"base": base, "grid": {"mu": [0.1, 0.15]}})).await;
     let single = submit_sweep(&c, &url, &json!({"base": base})).await;

@@ -59,16 +59,8 @@ struct Jet {
 /// given the Hermite basis `(h00, h10, h01, h11)` at `u` (or its derivatives).
 #[inline]
 fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
-    if catmull() {
-        return [h00 - 0.5 * h11, h01 + 0.5 * h10, -0.5 * h10, 0.5 * h11, 0.0, 0.0];
-    }
     let (a, b) = (h10 / 12.0, h11 / 12.0);
     [h00 - 8.0 * b, 8.0 * a + h01, -8.0 * a + b, -a + 8.0 * b, a, -b]
-}
-
-fn catmull() -> bool {
-    static CR: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *CR.get_or_init(|| std::env::var("KS_PIECES").is_ok_and(|v| v == "catmull"))
 }
 
 /// Control-point weights at `u` and their first two derivatives.
@@ -172,14 +164,8 @@ impl Piece {
         let c = &self.control;
         // Stencil order: e, e+1, e-1, e+2, e-2, e+3.
         let d = c[1] - c[0];
-        let (m0, m1) = if catmull() {
-            ((c[1] - c[2]) / 2.0, (c[3] - c[0]) / 2.0)
-        } else {
-            (
-                (c[4] - 8.0 * c[2] + 8.0 * c[1] - c[3]) / 12.0,
-                (c[2] - 8.0 * c[0] + 8.0 * c[3] - c[5]) / 12.0,
-            )
-        };
+        let m0 = (c[4] - 8.0 * c[2] + 8.0 * c[1] - c[3]) / 12.0;
+        let m1 = (c[2] - 8.0 * c[0] + 8.0 * c[3] - c[5]) / 12.0;
         4.0 / 27.0 * ((m0 - d).norm() + (m1 - d).norm())
     }
 }

@@ -290,9 +290,6 @@ impl GaussSeidel {
         while sweeps < options.max_sweeps && !converged {
             sweeps += 1;
             let (mut max_change2, mut max_force2) = (0.0f64, 0.0f64);
-            if sweep_mode() >= 2 && sweeps > 1 {
-                self.order.reverse();
-            }
             for &c in &self.order {
                 let row = &mut self.rows[c];
                 let r = row.update(
@@ -379,22 +376,8 @@ pub(super) fn residual(rows: &[Row], dv: &[Vector3<f64>], dspin: &[f64]) -> f64 
 /// usually share nodes and each update would wait for the previous one's
 /// velocity correction; two apart they rarely do, and the processor overlaps
 /// their updates. The order changes the iterates, not the solution.
-fn sweep_mode() -> u8 {
-    static M: std::sync::OnceLock<u8> = std::sync::OnceLock::new();
-    *M.get_or_init(|| match std::env::var("KS_SWEEP").as_deref() {
-        Ok("seq") => 1,
-        Ok("sym") => 2,
-        Ok("symseq") => 3,
-        _ => 0,
-    })
-}
-
 fn sweep_order(rows: &[Row], order: &mut Vec<usize>) {
     order.clear();
-    if sweep_mode() % 2 == 1 {
-        order.extend((0..rows.len()).filter(|&c| rows[c].inv_w_n > 0.0));
-        return;
-    }
     for parity in [0, 1] {
         order.extend((parity..rows.len()).step_by(2).filter(|&c| rows[c].inv_w_n > 0.0));
     }

@@ -9,58 +9,6 @@ use nalgebra::{Matrix3, SVector, Vector3};
 /// Adds the gradient and (lower) Hessian of interior node `i` over the stencil
 /// [x_{i-1}, th_{i-1}, x_i, th_i, x_{i+1}] to `out` and returns its energy.
 pub fn node(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) -> f64 {
-    static SINE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    if !*SINE.get_or_init(|| std::env::var("KS_KAPPA").is_ok_and(|v| v == "sine")) {
-        return der(rod, i, with_hessian, out);
-    }
-    let mut der_local = Local::<11>::default();
-    let energy = der(rod, i, with_hessian, &mut der_local);
-    sine_scaled(rod, i, with_hessian, energy, &der_local, out)
-}
-
-/// E' = f E with f = (1 + te.tf) / 2 = cos^2(phi/2): curvatures of magnitude 2 sin(phi/2) / l.
-fn sine_scaled(
-    rod: &Rod,
-    i: usize,
-    with_hessian: bool,
-    energy: f64,
-    der: &Local<11>,
-    out: &mut Local<11>,
-) -> f64 {
-    let g = &rod.geo;
-    let (te, tf) = (g.tangent[i - 1], g.tangent[i]);
-    let (ne, nf) = (g.edge_len[i - 1], g.edge_len[i]);
-    let d = te.dot(&tf);
-    let f = 0.5 * (1.0 + d);
-    let mut gf = SVector::<f64, 11>::zeros();
-    scatter_gradient(
-        &mut gf,
-        &((tf - te * d) * (0.5 / ne)),
-        &((te - tf * d) * (0.5 / nf)),
-        0.0,
-        0.0,
-    );
-    out.grad.axpy(f, &der.grad, 1.0);
-    out.grad.axpy(energy, &gf, 1.0);
-    if with_hessian {
-        let id = Matrix3::identity();
-        let sym = |a: &Vector3<f64>, b: &Vector3<f64>| a * b.transpose() + b * a.transpose();
-        let a = (te * te.transpose() * (3.0 * d) - sym(&te, &tf) - id * d) / (ne * ne);
-        let c = (tf * tf.transpose() * (3.0 * d) - sym(&te, &tf) - id * d) / (nf * nf);
-        let b = (id - tf * tf.transpose() - te * te.transpose() + te * tf.transpose() * d) / (ne * nf);
-        let mut h = der.hess * f;
-        scatter_stencil(&mut h, &a, &b, &c, (0.5 * energy, 0.0, 0.0));
-        for c in 0..11 {
-            for r in c..11 {
-                h[(r, c)] += gf[r] * der.grad[c] + der.grad[r] * gf[c];
-            }
-        }
-        out.hess += h;
-    }
-    f * energy
-}
-
-fn der(rod: &Rod, i: usize, with_hessian: bool, out: &mut Local<11>) -> f64 {
     let g = &rod.geo;
     let ei_l = rod.section.ei / rod.voronoi[i];
     let [k1, k2] = g.kappa[i];

@@ -94,7 +94,7 @@ impl World {
             }
             let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
             let (oa, ob) = (self.bodies[sa.body].first_node, self.bodies[sb.body].first_node);
-            let contact_distance = (sa.radius + sb.radius) * gap_scale();
+            let contact_distance = sa.radius + sb.radius;
             let mu = self.contact.friction;
             // The contact and each rod's unit tangent at it.
             let found = if smooth {
@@ -213,18 +213,8 @@ impl World {
                 .distance
             }
         };
-        (sa.radius + sb.radius) * gap_scale() - distance
+        sa.radius + sb.radius - distance
     }
-}
-
-fn gap_scale() -> f64 {
-    static G: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-    *G.get_or_init(|| {
-        std::env::var("KS_GAP_SCALE")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(1.0)
-    })
 }
 
 /// The pieces of the rods' smooth centre lines over segments `sa` and `sb`,

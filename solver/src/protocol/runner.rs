@@ -149,10 +149,6 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         geometry: params.contact_geometry,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
-            max_sweeps: std::env::var("KS_MAX_SWEEPS")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(defaults.solver.max_sweeps),
             ..defaults.solver
         },
         ..defaults

@@ -45,6 +45,31 @@ pub(super) fn detect(
     })
 }
 
+/// The event as reported: an inversion where its snap began
+/// ([`measurements::snap_onset`]; the stage's samples start at `first` in
+/// `series`), other events as found. The adaptive schedule acts where the
+/// detector fired (its windows are measured from there).
+pub(super) fn reported(series: &[Sample], first: usize, criteria: &InversionCriteria, event: Event) -> Event {
+    if event.kind != EventKind::Inversion {
+        return event;
+    }
+    let own = &series[first..];
+    let found = measurements::Inversion {
+        sample: event.at.sample - first,
+        ..event.at
+    };
+    let mut at = measurements::snap_onset(own, found, criteria);
+    if at == found {
+        return event;
+    }
+    at.sample += first;
+    Event {
+        at,
+        clean: at.f_bar_after < at.f_bar_before,
+        ..event
+    }
+}
+
 /// The first snap of a bend's stage whose samples start at `first` in
 /// `series` (a tightening): [`measurements::detect_inversion`] read on F bar
 /// in place of H bar, so that F bar must fall to `drop_fraction` of its

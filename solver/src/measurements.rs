@@ -333,7 +333,7 @@ pub fn loop_geometry(points: &[Vector3<f64>], start: usize, end: usize) -> LoopG
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Inversion {
     /// l_k bar, the knot's own length and l_c / L of the last sample before
-    /// H bar drops.
+    /// H bar drops (as reported, where the snap began: [`snap_onset`]).
     pub l_k_bar: f64,
     #[serde(default)]
     pub l_k_arc_bar: f64,

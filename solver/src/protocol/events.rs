@@ -189,6 +189,37 @@ mod tests {
         assert_eq!(detect(&falling, 0, Way(-1.0), &criteria, 2), None);
     }
 
+    /// An inversion that the detector reads a sample into its snap (H bar
+    /// 0.3 to 0.19, above 0.6 of 0.3, then to 0.15) is reported at its
+    /// onset, indexed in the series; a flip back is reported as found.
+    #[test]
+    fn an_inversion_is_reported_where_its_snap_began() {
+        let criteria = InversionCriteria::default();
+        let mut all = series(-1.0, |_| 0.1, |_| false);
+        let first = all.len();
+        all.extend(series(
+            1.0,
+            |l| match l {
+                l if l > 280.25 => 0.3,
+                l if l > 279.75 => 0.19,
+                _ => 0.15,
+            },
+            |l| (279.0..281.0).contains(&l),
+        ));
+        let found = detect(&all, first, Way(1.0), &criteria, 1).expect("an inversion");
+        assert_eq!((found.at.l_k_bar, found.at.sample), (280.0, first + 40));
+        let onset = reported(&all, first, &criteria, found);
+        assert_eq!((onset.at.l_k_bar, onset.at.sample), (280.5, first + 39));
+        assert_eq!((onset.at.h_bar_before, onset.at.h_bar_after), (0.3, 0.19));
+        let rising = series(
+            -1.0,
+            |l| if l < 320.0 { 0.1 } else { 0.3 },
+            |l| (320.0..322.0).contains(&l),
+        );
+        let back = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
+        assert_eq!(reported(&rising, 0, &criteria, back), back);
+    }
+
     /// A stage's event is found in its own samples, indexed in the series.
     #[test]
     fn events_are_found_in_the_stages_own_samples() {

@@ -451,14 +451,22 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
     None
 }
 
+/// Samples before the drop within which a snap's onset is looked for: a snap
+/// at the paper's pull rate lasts up to about three samples (1.5 l_k bar).
+/// A fall of H bar further back is not this snap's: a loop lying flat (n =
+/// 6, H bar about 0.02) falls and rises by a quarter of its H bar from one
+/// sample to the next.
+pub const ONSET_SAMPLES: usize = 3;
+
 /// Where the snap `at` that [`detect_inversion`] found in `series` began:
-/// the sample before the largest one-sample fall of H bar from the window's
-/// largest H bar to the drop (the later of equal falls), with F bar and H bar
-/// around it. A snap within one sample is its own onset; the detector reads
-/// one that falls to just above `drop_fraction` of the window's largest in
-/// its first sample a sample or two into it (a friction-locked n = 2: H bar
-/// 0.320 to 0.195 with F bar 0.196 to 0.139, where the threshold is 0.192),
-/// and this moves it back to where it began.
+/// the sample before the largest one-sample fall of H bar within
+/// [`ONSET_SAMPLES`] before the drop and after the window's largest H bar
+/// (the later of equal falls), with F bar and H bar around it. A snap within
+/// one sample is its own onset; the detector reads one that falls to just
+/// above `drop_fraction` of the window's largest in its first sample a
+/// sample or two into it (a friction-locked n = 2: H bar 0.280 to 0.195 in
+/// one sample, the threshold 0.193; a snap spread over three samples, H bar
+/// 0.286, 0.239, 0.223, 0.183), and this moves it back to where it began.
 pub fn snap_onset(series: &[Sample], at: Inversion, criteria: &InversionCriteria) -> Inversion {
     let j = at.sample + 1;
     let drop = &series[j];
@@ -470,7 +478,7 @@ pub fn snap_onset(series: &[Sample], at: Inversion, criteria: &InversionCriteria
         return at;
     };
     let fall = |i: usize| series[i].h_bar - series[i + 1].h_bar;
-    let onset = (start..j)
+    let onset = (start.max(j.saturating_sub(ONSET_SAMPLES))..j)
         .max_by(|&a, &b| fall(a).total_cmp(&fall(b)))
         .unwrap_or(at.sample);
     if onset == at.sample {
@@ -786,6 +794,17 @@ mod tests {
         }
         let found = detect_inversion(&even, &criteria).expect("detected");
         assert_eq!(snap_onset(&even, found, &criteria), found);
+        // A larger fall more than `ONSET_SAMPLES` before the drop is not
+        // this snap's.
+        let mut earlier: Vec<Sample> = s[..40].to_vec();
+        earlier[35].h_bar = 0.6;
+        for k in 36..40 {
+            earlier[k].h_bar = 0.55;
+        }
+        earlier.push(sample(160.0, 0.45, 1e-6, 0.5));
+        let found = detect_inversion(&earlier, &criteria).expect("detected");
+        assert_eq!(found.sample, 39);
+        assert_eq!(snap_onset(&earlier, found, &criteria), found);
     }
 
     #[test]

@@ -798,8 +798,8 @@ mod tests {
         // this snap's.
         let mut earlier: Vec<Sample> = s[..40].to_vec();
         earlier[35].h_bar = 0.6;
-        for k in 36..40 {
-            earlier[k].h_bar = 0.55;
+        for later in &mut earlier[36..40] {
+            later.h_bar = 0.55;
         }
         earlier.push(sample(160.0, 0.45, 1e-6, 0.5));
         let found = detect_inversion(&earlier, &criteria).expect("detected");

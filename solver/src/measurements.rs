@@ -333,7 +333,7 @@ pub fn loop_geometry(points: &[Vector3<f64>], start: usize, end: usize) -> LoopG
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Inversion {
     /// l_k bar, the knot's own length and l_c / L of the last sample before
-    /// H bar drops.
+    /// H bar drops (as reported, where the snap began: [`snap_onset`]).
     pub l_k_bar: f64,
     #[serde(default)]
     pub l_k_arc_bar: f64,
@@ -449,6 +449,57 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
         });
     }
     None
+}
+
+/// Samples before the drop within which a snap's onset is looked for: a snap
+/// at the paper's pull rate lasts up to about three samples (1.5 l_k bar).
+/// A fall of H bar further back is not this snap's: a loop lying flat (n =
+/// 6, H bar about 0.02) falls and rises by a quarter of its H bar from one
+/// sample to the next.
+pub const ONSET_SAMPLES: usize = 3;
+
+/// Where the snap `at` that [`detect_inversion`] found in `series` began:
+/// the sample before the largest one-sample fall of H bar within
+/// [`ONSET_SAMPLES`] before the drop and after the window's largest H bar
+/// (the later of equal falls), with F bar and H bar around it. A snap within
+/// one sample is its own onset; the detector reads one that falls to just
+/// above `drop_fraction` of the window's largest in its first sample a
+/// sample or two into it (a friction-locked n = 2: H bar 0.280 to 0.195 in
+/// one sample, the threshold 0.193; a snap spread over three samples, H bar
+/// 0.286, 0.239, 0.223, 0.183), and this moves it back to where it began.
+pub fn snap_onset(series: &[Sample], at: Inversion, criteria: &InversionCriteria) -> Inversion {
+    let j = at.sample + 1;
+    let drop = &series[j];
+    let Some(start) = (0..j)
+        .rev()
+        .take_while(|&i| series[i].l_k_bar - drop.l_k_bar <= criteria.window)
+        .max_by(|&a, &b| series[a].h_bar.total_cmp(&series[b].h_bar))
+    else {
+        return at;
+    };
+    let fall = |i: usize| series[i].h_bar - series[i + 1].h_bar;
+    let onset = (start.max(j.saturating_sub(ONSET_SAMPLES))..j)
+        .max_by(|&a, &b| fall(a).total_cmp(&fall(b)))
+        .unwrap_or(at.sample);
+    if onset == at.sample {
+        return at;
+    }
+    let before = &series[onset];
+    let hi = (j + 4).min(series.len());
+    Inversion {
+        l_k_bar: before.l_k_bar,
+        l_k_arc_bar: before.l_k_arc_bar,
+        l_c_over_l: before.l_c_over_l,
+        f_bar_before: before.f_bar,
+        f_bar_after: series[onset + 1..hi]
+            .iter()
+            .map(|s| s.f_bar)
+            .fold(f64::INFINITY, f64::min),
+        h_bar_before: before.h_bar,
+        h_bar_after: series[onset + 1].h_bar,
+        sample: onset,
+        ..at
+    }
 }
 
 /// The loop flipping back while the knot loosens (l_k bar increasing): the
@@ -709,6 +760,51 @@ mod tests {
         pushed[39].f_bar = -0.004;
         pushed[40].f_bar = -0.012;
         assert!(detect_inversion(&pushed, &InversionCriteria::default()).is_none());
+    }
+
+    /// A snap whose first sample leaves H bar just above the threshold (0.8
+    /// to 0.49, the threshold 0.48) is read a sample later by the detector;
+    /// its onset is the sample before the largest fall, with F bar around it.
+    /// A snap within one sample, or a drop in equal steps, keeps the
+    /// detector's sample.
+    #[test]
+    fn the_onset_of_a_snap_is_before_its_largest_fall() {
+        let criteria = InversionCriteria::default();
+        let mut s: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0))
+            .collect();
+        for (k, (h, f)) in [(0.49, 0.7), (0.47, 0.5), (0.45, 0.45)].into_iter().enumerate() {
+            s.push(sample(160.0 - k as f64, h, 1e-9, f));
+        }
+        let found = detect_inversion(&s, &criteria).expect("detected");
+        assert_eq!((found.l_k_bar, found.sample), (160.0, 40));
+        let onset = snap_onset(&s, found, &criteria);
+        assert_eq!((onset.l_k_bar, onset.sample), (161.0, 39));
+        assert_eq!((onset.h_bar_before, onset.h_bar_after), (0.8, 0.49));
+        assert_eq!((onset.f_bar_before, onset.f_bar_after), (1.0, 0.45));
+        assert_eq!(onset.kinetic_energy_ratio, found.kinetic_energy_ratio);
+        let mut sudden: Vec<Sample> = s[..40].to_vec();
+        sudden.push(sample(160.0, 0.05, 1e-6, 0.6));
+        sudden.push(sample(159.0, 0.04, 1e-8, 0.9));
+        let found = detect_inversion(&sudden, &criteria).expect("detected");
+        assert_eq!(snap_onset(&sudden, found, &criteria), found);
+        let mut even: Vec<Sample> = s[..40].to_vec();
+        for (k, h) in [0.75, 0.5, 0.25].into_iter().enumerate() {
+            even.push(sample(160.0 - k as f64, h, 1e-6, 0.5));
+        }
+        let found = detect_inversion(&even, &criteria).expect("detected");
+        assert_eq!(snap_onset(&even, found, &criteria), found);
+        // A larger fall more than `ONSET_SAMPLES` before the drop is not
+        // this snap's.
+        let mut earlier: Vec<Sample> = s[..40].to_vec();
+        earlier[35].h_bar = 0.6;
+        for later in &mut earlier[36..40] {
+            later.h_bar = 0.55;
+        }
+        earlier.push(sample(160.0, 0.45, 1e-6, 0.5));
+        let found = detect_inversion(&earlier, &criteria).expect("detected");
+        assert_eq!(found.sample, 39);
+        assert_eq!(snap_onset(&earlier, found, &criteria), found);
     }
 
     #[test]

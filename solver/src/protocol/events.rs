@@ -45,6 +45,31 @@ pub(super) fn detect(
     })
 }
 
+/// The event as reported: an inversion where its snap began
+/// ([`measurements::snap_onset`]; the stage's samples start at `first` in
+/// `series`), other events as found. The adaptive schedule acts where the
+/// detector fired (its windows are measured from there).
+pub(super) fn reported(series: &[Sample], first: usize, criteria: &InversionCriteria, event: Event) -> Event {
+    if event.kind != EventKind::Inversion {
+        return event;
+    }
+    let own = &series[first..];
+    let found = measurements::Inversion {
+        sample: event.at.sample - first,
+        ..event.at
+    };
+    let mut at = measurements::snap_onset(own, found, criteria);
+    if at == found {
+        return event;
+    }
+    at.sample += first;
+    Event {
+        at,
+        clean: at.f_bar_after < at.f_bar_before,
+        ..event
+    }
+}
+
 /// The first snap of a bend's stage whose samples start at `first` in
 /// `series` (a tightening): [`measurements::detect_inversion`] read on F bar
 /// in place of H bar, so that F bar must fall to `drop_fraction` of its
@@ -162,6 +187,37 @@ mod tests {
         assert_eq!(detect(&rising, 0, Way(1.0), &criteria, 2), None);
         let falling = series(-1.0, |l| if l < 320.0 { 0.3 } else { 0.1 }, |_| false);
         assert_eq!(detect(&falling, 0, Way(-1.0), &criteria, 2), None);
+    }
+
+    /// An inversion that the detector reads a sample into its snap (H bar
+    /// 0.3 to 0.19, above 0.6 of 0.3, then to 0.15) is reported at its
+    /// onset, indexed in the series; a flip back is reported as found.
+    #[test]
+    fn an_inversion_is_reported_where_its_snap_began() {
+        let criteria = InversionCriteria::default();
+        let mut all = series(-1.0, |_| 0.1, |_| false);
+        let first = all.len();
+        all.extend(series(
+            1.0,
+            |l| match l {
+                l if l > 280.25 => 0.3,
+                l if l > 279.75 => 0.19,
+                _ => 0.15,
+            },
+            |l| (279.0..281.0).contains(&l),
+        ));
+        let found = detect(&all, first, Way(1.0), &criteria, 1).expect("an inversion");
+        assert_eq!((found.at.l_k_bar, found.at.sample), (280.0, first + 40));
+        let onset = reported(&all, first, &criteria, found);
+        assert_eq!((onset.at.l_k_bar, onset.at.sample), (280.5, first + 39));
+        assert_eq!((onset.at.h_bar_before, onset.at.h_bar_after), (0.3, 0.19));
+        let rising = series(
+            -1.0,
+            |l| if l < 320.0 { 0.1 } else { 0.3 },
+            |l| (320.0..322.0).contains(&l),
+        );
+        let back = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
+        assert_eq!(reported(&rising, 0, &criteria, back), back);
     }
 
     /// A stage's event is found in its own samples, indexed in the series.

@@ -412,7 +412,8 @@ impl Case<'_> {
         });
         travel.event = found;
         if let Some(event) = found {
-            self.record(event);
+            let reported = events::reported(&self.report.series, travel.first_sample, &criteria, event);
+            self.record(reported);
         }
         found
     }

@@ -170,6 +170,7 @@ impl Family for CloveHitchSpec {
                 },
             ],
             cylinder: Some(cylinder),
+            knots: Vec::new(),
         })
     }
 

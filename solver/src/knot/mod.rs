@@ -6,7 +6,7 @@
 //! - [`figure_eight`]: the figure-eight knot `4_1`;
 //! - [`braid`]: the closure of any braid word on at most 5 strands;
 //! - [`bends`]: two rods tied together, the reef, granny, thief and grief
-//!   knots;
+//!   knots, and [`fisherman`]'s two overhand knots;
 //! - [`hitch`]: the clove hitch, one rod tied round a rigid, fixed cylinder.
 //!
 //! A family's knot is a [`StartShape`]: its rods' centre lines with the two
@@ -23,6 +23,7 @@ mod alexander;
 pub mod bends;
 pub mod braid;
 pub mod figure_eight;
+pub mod fisherman;
 pub mod hitch;
 pub mod overhand;
 mod polyline;
@@ -150,6 +151,9 @@ pub struct StartShape {
     pub clamps: [Clamp; 2],
     /// The rigid, fixed cylinder a hitch is tied round; `None` for a knot.
     pub cylinder: Option<crate::contact::Cylinder>,
+    /// Each rod's own knot (its nodes), where the builder ties one in each
+    /// rod of a bend: the fisherman's overhand knots; empty otherwise.
+    pub knots: Vec<std::ops::Range<usize>>,
 }
 
 impl StartShape {
@@ -175,6 +179,7 @@ impl StartShape {
                 },
             ],
             cylinder: None,
+            knots: Vec::new(),
         }
     }
 

@@ -231,7 +231,7 @@ fn bend(
         alexander: None,
         clamps: [clamps[0], clamps[1]],
         cylinder: None,
-        knots: Vec::new(),
+        own_knots: false,
     })
 }
 

@@ -200,7 +200,7 @@ impl BendSpec {
                 },
             ],
             cylinder: None,
-            knots: Vec::new(),
+            own_knots: false,
         })
     }
 }

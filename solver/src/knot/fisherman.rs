@@ -40,13 +40,13 @@ use std::ops::Range;
 /// Half the distance between the two standing parts, in radii h.
 const SIDE: f64 = 2.0;
 /// The overhand's distance from the knot's middle along the pull, in radii h.
-const CENTRE: f64 = 17.0;
+const CENTRE: f64 = 60.0;
 /// Height of a crossing's strands above and below the plane, in radii h.
 const LIFT: f64 = 1.8;
 /// Arc length either side of a crossing over which a strand rises and falls, in radii h.
 const SPREAD: f64 = 4.0;
 /// Length of the free tail past the overhand, in radii h.
-pub const TAIL: f64 = 30.0;
+pub const TAIL: f64 = 60.0;
 /// Longest edge, in radii h: the crossings' lifts need a few nodes.
 const MAX_EDGE: f64 = 2.5;
 /// Points of the overhand's planar centre line, about its origin, in radii
@@ -129,18 +129,13 @@ pub(super) fn tie(spec: &BendSpec) -> Result<StartShape, KnotError> {
         .collect();
     // Rod 1: half a turn about z.
     let rod1: Vec<Vector3<f64>> = rod0.iter().map(|p| Vector3::new(-p.x, -p.y, p.z)).collect();
-    let knot_arc = [arc[knot_from] * h, arc[knot_to] * h];
-    let mut knot = 0..0;
     let rods: Vec<Vec<Vector3<f64>>> = [rod0, rod1]
         .into_iter()
         .map(|dense| {
             let dense = Dense::new(dense);
-            let (nodes, at) = equal_chords(&dense.points, &dense.arc, edge, spec.nodes)
-                .expect("the tail's line outlasts the chords");
-            // The overhand's nodes (the same in both rods).
-            let [from, to] = knot_arc.map(|s| at.iter().position(|&a| a >= s).unwrap_or(at.len()));
-            knot = from..to;
-            nodes
+            equal_chords(&dense.points, &dense.arc, edge, spec.nodes)
+                .expect("the tail's line outlasts the chords")
+                .0
         })
         .collect();
     check_clearance_rods(&rods, h, edge)?;
@@ -162,7 +157,7 @@ pub(super) fn tie(spec: &BendSpec) -> Result<StartShape, KnotError> {
             },
         ],
         cylinder: None,
-        knots: vec![knot.clone(), knot],
+        own_knots: true,
     })
 }
 
@@ -237,7 +232,11 @@ fn lifts(planar: &[Vector2<f64>], arc: &[f64], knot: Range<usize>) -> Vec<(f64, 
             }
         }
     }
-    assert_eq!(between.len(), 3, "the overhand's three crossings with the other's standing part");
+    assert_eq!(
+        between.len(),
+        3,
+        "the overhand's three crossings with the other's standing part"
+    );
     between.sort_by(|a, b| a.1.total_cmp(&b.1));
     for ((mine, theirs), side) in between.into_iter().zip([1.0, -1.0, -1.0]) {
         bumps.extend([(mine, side), (theirs, -side)]);

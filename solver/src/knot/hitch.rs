@@ -170,7 +170,7 @@ impl Family for CloveHitchSpec {
                 },
             ],
             cylinder: Some(cylinder),
-            knots: Vec::new(),
+            own_knots: false,
         })
     }
 

@@ -40,7 +40,7 @@ pub use overhand::{
     BRAID_MARGIN, KNOT_RADII, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
     MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
-pub use polyline::closest_approach;
+pub use polyline::{closest_approach, self_contact_span};
 pub use start::{check_rods_clearance, checked_rod, checked_start};
 pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
@@ -151,9 +151,10 @@ pub struct StartShape {
     pub clamps: [Clamp; 2],
     /// The rigid, fixed cylinder a hitch is tied round; `None` for a knot.
     pub cylinder: Option<crate::contact::Cylinder>,
-    /// Each rod's own knot (its nodes), where the builder ties one in each
-    /// rod of a bend: the fisherman's overhand knots; empty otherwise.
-    pub knots: Vec<std::ops::Range<usize>>,
+    /// Each rod of a bend ties a knot of its own: the fisherman's overhand
+    /// knots (found in the run by their self-contacts,
+    /// [`self_contact_span`]).
+    pub own_knots: bool,
 }
 
 impl StartShape {
@@ -179,7 +180,7 @@ impl StartShape {
                 },
             ],
             cylinder: None,
-            knots: Vec::new(),
+            own_knots: false,
         }
     }
 

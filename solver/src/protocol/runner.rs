@@ -276,8 +276,8 @@ pub(super) struct Case<'a> {
     pub(super) clamps: [Clamp; 2],
     /// A hitch's cylinder.
     cylinder: Option<Cylinder>,
-    /// Each rod's own knot, where the builder ties one (the fisherman's).
-    knots: Vec<std::ops::Range<usize>>,
+    /// Each rod of a bend ties a knot of its own (the fisherman's).
+    own_knots: bool,
     /// The case's inertia and time unit.
     pub(super) scales: Scales,
     /// Unit vector from the start clamp to the finish clamp.
@@ -331,7 +331,7 @@ impl<'a> Case<'a> {
             expected: start.alexander.as_ref().map_or(0, Alexander::determinant),
             clamps: start.clamps,
             cylinder: start.cylinder,
-            knots: start.knots.clone(),
+            own_knots: start.own_knots,
             scales: params.scales(),
             axis,
             program: params.program(),
@@ -785,16 +785,18 @@ impl<'a> Case<'a> {
             None => {
                 let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
                 // Rods with knots of their own bend however they lie.
-                let straight = !self.knots.is_empty() || energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR);
+                let straight = self.own_knots || energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR);
                 near.is_none() && straight
             }
         };
-        let (knots_apart_bar, knots_touch) = match self.knots.as_slice() {
-            [k0, k1] => {
-                let own = [&positions[0][k0.clone()], &positions[1][k1.clone()]];
+        let spans = (self.own_knots).then(|| {
+            [0, 1].map(|r| knot::self_contact_span(&positions[r], params.h, edge, PARTED * params.h))
+        });
+        let (knots_apart_bar, knots_touch) = match spans {
+            Some([Some(a), Some(b)]) => {
+                let own = [positions[0][a].to_vec(), positions[1][b].to_vec()];
                 let centroid = |p: &[Vector3<f64>]| p.iter().sum::<Vector3<f64>>() / p.len() as f64;
-                let apart = (centroid(own[0]) - centroid(own[1])).dot(&self.axis) / params.h;
-                let own = own.map(<[Vector3<f64>]>::to_vec);
+                let apart = (centroid(&own[0]) - centroid(&own[1])).dot(&self.axis) / params.h;
                 let touch = knot::closest_approach(&own, params.h, edge, PARTED * params.h, true).is_some();
                 (Some(apart), Some(touch))
             }

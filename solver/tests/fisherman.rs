@@ -116,6 +116,35 @@ fn the_fisherman_is_a_bend_case() {
     assert_eq!(field(CaseParams { n: 4, ..params }), "n");
 }
 
+/// Pulled by its standing ends (mu = 0.5), the fisherman's knot shows Tong
+/// et al.'s two regimes: once the tails are free the overhands slide
+/// towards each other (their separation falls by more than 30 h) at low
+/// force (F bar below a third of the largest the knot holds), then meet
+/// (within 4 h) and jam, and the force rises past the setting load.
+#[test]
+fn the_fisherman_slides_then_jams() {
+    let params = CaseParams {
+        knot: KnotKind::Fisherman,
+        mu: 0.5,
+        ..CaseParams::default()
+    };
+    let report = solver::protocol::run(&params, &mut |_| true);
+    assert_eq!(report.status, solver::protocol::Status::Completed, "{}", report.reason);
+    let holding = report.holding_force_bar.expect("a bend's holding force");
+    let free: Vec<(f64, f64)> = (report.series.iter().zip(&report.bend_series))
+        .filter(|(_, b)| b.tails_free)
+        .map_while(|(s, b)| b.knots_apart_bar.map(|a| (s.f_bar, a)))
+        .collect();
+    let met = free.iter().position(|&(_, a)| a < 4.0).expect("the overhands meet");
+    let (first, last) = (free[0].1, free[met].1);
+    assert!(first - last > 30.0, "slid from {first} h to {last} h");
+    let sliding = free[..met].iter().map(|s| s.0).fold(0.0, f64::max);
+    assert!(sliding < holding / 3.0, "sliding at F bar {sliding}, holding {holding}");
+    let jammed = free[met..].iter().map(|s| s.0).fold(0.0, f64::max);
+    let setting = 0.5 * solver::case::BEND_TIGHT_FORCE_BAR;
+    assert!(jammed > setting, "jammed at F bar {jammed}");
+}
+
 /// Crossings of polylines `a` and `b` (the same one: its non-neighbouring
 /// segments) seen along z: `(segment of a, segment of b, a on top)`.
 fn crossings(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Vec<(usize, usize, bool)> {

@@ -6,9 +6,9 @@
 //! **sliding** once they are free while the overhands slide towards each
 //! other, **stretching** from the first sample with the tails free from
 //! which their separation falls by less than [`SLACK`] h more before an
-//! overhand unties or the run ends (they have met and jammed: the pull no
-//! longer brings them together), and **untied** once an overhand has no two
-//! strands touching (its tail has slipped out: the knot has failed). The
+//! overhand comes loose or the run ends (they have met and jammed: the pull
+//! no longer brings them together), and **loose** once an overhand has no
+//! two strands touching (its tail slips out of it: the knot fails). The
 //! figure as SVG, and a markdown table of each regime's span in l_k bar,
 //! F bar and separation.
 use anyhow::{Context, Result, ensure};
@@ -38,18 +38,18 @@ enum Regime {
     Setting,
     Sliding,
     Stretching,
-    Untied,
+    Loose,
 }
 
 impl Regime {
-    const ALL: [Self; 4] = [Self::Setting, Self::Sliding, Self::Stretching, Self::Untied];
+    const ALL: [Self; 4] = [Self::Setting, Self::Sliding, Self::Stretching, Self::Loose];
 
     fn name(self) -> &'static str {
         match self {
             Self::Setting => "setting (tails held)",
             Self::Sliding => "sliding",
             Self::Stretching => "stretching (overhands jammed)",
-            Self::Untied => "an overhand untied",
+            Self::Loose => "an overhand loose",
         }
     }
 
@@ -58,7 +58,7 @@ impl Regime {
             Self::Setting => Style::Dotted,
             Self::Sliding => Style::Dashed,
             Self::Stretching => Style::Line,
-            Self::Untied => Style::Dots { filled: false },
+            Self::Loose => Style::Dots { filled: false },
         }
     }
 }
@@ -85,21 +85,21 @@ impl Run {
         let measured: Vec<(f64, f64, Option<f64>, bool)> = (report.series.iter().zip(&report.bend_series))
             .map(|(s, b): (_, &BendSample)| (s.l_k_bar, s.f_bar, b.knots_apart_bar, b.tails_free))
             .collect();
-        // The least separation from each sample on, until an overhand unties.
+        // The least separation from each sample on, until an overhand comes loose.
         let mut least = vec![f64::INFINITY; measured.len() + 1];
         for i in (0..measured.len()).rev() {
             least[i] = measured[i].2.map_or(f64::INFINITY, |a| a.min(least[i + 1]));
         }
         let stalls = |i: usize| measured[i].2.is_some_and(|a| a - least[i] < SLACK);
-        let (mut jammed, mut untied) = (false, false);
+        let (mut jammed, mut loose) = (false, false);
         let samples = (0..measured.len())
             .map(|i| {
                 let (l, f, apart, free) = measured[i];
-                untied |= free && apart.is_none();
+                loose |= free && apart.is_none();
                 jammed |= free && stalls(i);
-                let regime = match (free, untied, jammed) {
+                let regime = match (free, loose, jammed) {
                     (false, ..) => Regime::Setting,
-                    (true, true, _) => Regime::Untied,
+                    (true, true, _) => Regime::Loose,
                     (true, false, false) => Regime::Sliding,
                     (true, false, true) => Regime::Stretching,
                 };
@@ -208,7 +208,7 @@ fn figure(runs: &[Run]) -> Result<String> {
                 style: regime.style(),
             });
         }
-        for (regime, what) in [(Regime::Stretching, "jam"), (Regime::Untied, "untied")] {
+        for (regime, what) in [(Regime::Stretching, "jam"), (Regime::Loose, "loose")] {
             let Some(at) = run.of(regime).next() else { continue };
             // One label for marks that fall together.
             match markers
@@ -223,7 +223,7 @@ fn figure(runs: &[Run]) -> Result<String> {
     let largest = (runs.iter().flat_map(|r| r.samples.iter().map(|s| s.1))).fold(0.0, f64::max);
     let left = Plot {
         title: "The fisherman's knot: force".into(),
-        caption: "Pulled from right to left; dotted: tails held, dashed: sliding, solid: stretching, circles: untied"
+        caption: "Pulled from right to left; dotted: tails held, dashed: sliding, solid: stretching, circles: loose"
             .into(),
         x_label: "l_k bar = (2L - the clamps' distance) / h".into(),
         y_label: "F bar".into(),
@@ -236,7 +236,7 @@ fn figure(runs: &[Run]) -> Result<String> {
     };
     let right = Plot {
         title: "The overhands' separation".into(),
-        caption: "Between the two overhand knots' centroids along the pull; marks: where they jam, where one unties"
+        caption: "Between the two overhand knots' centroids along the pull; marks: where they jam, where one comes loose"
             .into(),
         x_label: "l_k bar".into(),
         y_label: "separation / h".into(),

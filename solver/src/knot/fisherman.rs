@@ -161,7 +161,7 @@ pub(super) fn tie(spec: &BendSpec) -> Result<StartShape, KnotError> {
     })
 }
 
-/// The centripetal-free (uniform) Catmull-Rom spline through `points`,
+/// The uniform Catmull-Rom spline through `points`,
 /// sampled at most `spacing` apart.
 fn spline(points: &[(f64, f64)], spacing: f64) -> Vec<Vector2<f64>> {
     let p: Vec<Vector2<f64>> = points.iter().map(|&(x, y)| Vector2::new(x, y)).collect();

@@ -129,17 +129,28 @@ fn the_fisherman_slides_then_jams() {
         ..CaseParams::default()
     };
     let report = solver::protocol::run(&params, &mut |_| true);
-    assert_eq!(report.status, solver::protocol::Status::Completed, "{}", report.reason);
+    assert_eq!(
+        report.status,
+        solver::protocol::Status::Completed,
+        "{}",
+        report.reason
+    );
     let holding = report.holding_force_bar.expect("a bend's holding force");
     let free: Vec<(f64, f64)> = (report.series.iter().zip(&report.bend_series))
         .filter(|(_, b)| b.tails_free)
         .map_while(|(s, b)| b.knots_apart_bar.map(|a| (s.f_bar, a)))
         .collect();
-    let met = free.iter().position(|&(_, a)| a < 4.0).expect("the overhands meet");
+    let met = free
+        .iter()
+        .position(|&(_, a)| a < 4.0)
+        .expect("the overhands meet");
     let (first, last) = (free[0].1, free[met].1);
     assert!(first - last > 30.0, "slid from {first} h to {last} h");
     let sliding = free[..met].iter().map(|s| s.0).fold(0.0, f64::max);
-    assert!(sliding < holding / 3.0, "sliding at F bar {sliding}, holding {holding}");
+    assert!(
+        sliding < holding / 3.0,
+        "sliding at F bar {sliding}, holding {holding}"
+    );
     let jammed = free[met..].iter().map(|s| s.0).fold(0.0, f64::max);
     let setting = 0.5 * solver::case::BEND_TIGHT_FORCE_BAR;
     assert!(jammed > setting, "jammed at F bar {jammed}");

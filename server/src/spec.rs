@@ -812,7 +812,8 @@ mod tests {
         assert_eq!(points.len(), 10);
         assert_eq!(points[0].1, 0.016);
         assert_eq!(points[9].1, 0.032);
-        assert!(points.iter().all(|p| p.0 == "clove_hitch"));
+        assert_eq!(points[0].0, "clove_hitch R = 0.016 m");
+        assert_eq!(points[9].0, "clove_hitch R = 0.032 m");
         assert!(hitches.cases.iter().all(|c| c.params.h == 1.6e-3));
         let bad = spec(serde_json::json!({"grid": {"knot": [
             "figure_eight",

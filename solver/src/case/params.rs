@@ -703,12 +703,14 @@ impl CaseParams {
     }
 
     /// The knot in a few words: `"overhand n = 3"`, `"figure_eight"`,
-    /// `"braid s1 s1 s1"` (the word as given).
+    /// `"braid s1 s1 s1"` (the word as given), `"clove_hitch R = 0.032 m"`
+    /// (a pole's radius when given).
     pub fn knot_label(&self) -> String {
-        match (self.knot, &self.braid_word) {
-            (KnotKind::Overhand, _) => format!("overhand n = {}", self.n),
-            (KnotKind::Braid, Some(word)) => format!("braid {}", word.trim()),
-            (kind, _) => kind.to_string(),
+        match (self.knot, &self.braid_word, self.cylinder_radius) {
+            (KnotKind::Overhand, ..) => format!("overhand n = {}", self.n),
+            (KnotKind::Braid, Some(word), _) => format!("braid {}", word.trim()),
+            (KnotKind::CloveHitch, _, Some(radius)) => format!("clove_hitch R = {radius} m"),
+            (kind, ..) => kind.to_string(),
         }
     }
 

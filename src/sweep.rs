@@ -20,7 +20,7 @@ use std::time::Duration;
 pub struct Args {
     #[command(flatten)]
     queue: crate::queue_args::QueueArgs,
-    /// A preset: fig7, fig9, fig11, hysteresis, twist, knots, bends or materials (see `GET /api/presets`).
+    /// A preset: fig7, fig9, fig11, hysteresis, twist, knots, bends, hitches or materials (see `GET /api/presets`).
     #[arg(long)]
     preset: Option<String>,
     /// A sweep specification: JSON as for `POST /api/sweeps`.

@@ -271,6 +271,7 @@ async fn submit_run_and_phase_diagram_end_to_end() {
             "twist",
             "knots",
             "bends",
+            "hitches",
             "materials"
         ]
     );

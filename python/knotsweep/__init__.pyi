@@ -156,7 +156,7 @@ def run(
     *,
     progress: bool | Callable[[Progress], Any] | None = None,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "clove_hitch"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "fisherman", "clove_hitch"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
     cylinder_radius: float | None = None,
@@ -210,17 +210,18 @@ def run(
           both ends and pulled apart; its Alexander polynomial is checked on the start shape and at the end
           and reported (alexander_initial, alexander_final: coefficients, lowest power first), and the knot
           determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends "reef",
-          "granny", "thief" and "grief" tie two rods of length L together, pull their standing ends apart with
-          the tails free until tight (max_force_bar, default 0.05) or until the rods slip apart, and report
-          whether the rods still hold each other and the holding force (the largest F bar before they part),
-          with l_k bar = (2L - the pulled clamps' distance) / h. "clove_hitch" ties the rod round a rigid,
-          fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls its two ends
-          apart, away from the cylinder, until the hitch has set (F bar 0.025), lets the tail go with a weight
-          of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default 0.05) or until
-          the rod slips round the cylinder (less than one and a half turns left on it): tied and
-          holding_force_bar as for a bend, l_k bar = (L - the standing end's distance from where the tail was
-          held) / h; the report carries the cylinder. Range: "overhand" or "figure_eight" or "braid" or "reef"
-          or "granny" or "thief" or "grief" or "clove_hitch". Default: "overhand". Paper: "overhand".
+          "granny", "thief", "grief" and "fisherman" (two overhand knots, each round the other rod) tie two
+          rods of length L together, pull their standing ends apart with the tails free until tight
+          (max_force_bar, default 0.05) or until the rods slip apart, and report whether the rods still hold
+          each other and the holding force (the largest F bar before they part), with l_k bar = (2L - the
+          pulled clamps' distance) / h. "clove_hitch" ties the rod round a rigid, fixed cylinder of radius
+          cylinder_radius (frictional contact with the same mu), pulls its two ends apart, away from the
+          cylinder, until the hitch has set (F bar 0.025), lets the tail go with a weight of F bar 0.005 on it
+          and pulls the standing end until tight (max_force_bar, default 0.05) or until the rod slips round
+          the cylinder (less than one and a half turns left on it): tied and holding_force_bar as for a bend,
+          l_k bar = (L - the standing end's distance from where the tail was held) / h; the report carries the
+          cylinder. Range: "overhand" or "figure_eight" or "braid" or "reef" or "granny" or "thief" or "grief"
+          or "fisherman" or "clove_hitch". Default: "overhand". Paper: "overhand".
       n: Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).
           Range: integer in 1..=8. Default: 3.
       braid_word: The braid whose closure knot "braid" ties: generators s1 ... s4 (s_i crosses strands i and i
@@ -372,7 +373,7 @@ def run(
 def validate(
     *,
     # Knot
-    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "clove_hitch"] = "overhand",
+    knot: Literal["overhand", "figure_eight", "braid", "reef", "granny", "thief", "grief", "fisherman", "clove_hitch"] = "overhand",
     n: int = 3,
     braid_word: str | None = None,
     cylinder_radius: float | None = None,

@@ -60,7 +60,7 @@ pub struct SweepSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// A preset name: `fig7`, `fig9`, `fig11`, `hysteresis`, `twist`,
-    /// `knots`, `bends` or `materials` (see `GET /api/presets`).
+    /// `knots`, `bends`, `hitches` or `materials` (see `GET /api/presets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preset: Option<String>,
     /// Case parameters common to every case (a partial `CaseParams`).
@@ -207,6 +207,21 @@ pub fn presets() -> Vec<Preset> {
                 (
                     KNOT_AXIS,
                     ["reef", "granny", "thief", "grief"].map(Value::from).to_vec(),
+                ),
+                ("mu", numbers(&[0.1, 0.2, 0.3, 0.4, 0.5])),
+            ],
+        ),
+        grid(
+            "hitches",
+            "The clove hitch on a rigid, fixed pole of radius 10 h and 20 h: holding force against mu (h = 1.6 mm, \
+             mu = 0.1 ... 0.5)",
+            serde_json::json!({"h": 1.6e-3}),
+            vec![
+                (
+                    KNOT_AXIS,
+                    [0.016, 0.032]
+                        .map(|r| serde_json::json!({"knot": "clove_hitch", "cylinder_radius": r}))
+                        .to_vec(),
                 ),
                 ("mu", numbers(&[0.1, 0.2, 0.3, 0.4, 0.5])),
             ],
@@ -789,6 +804,17 @@ mod tests {
         assert_eq!(points.len(), 20);
         assert_eq!(points[0], ("reef".to_string(), 0.1));
         assert_eq!(points[19], ("grief".to_string(), 0.5));
+        let hitches = expand(&spec(serde_json::json!({"preset": "hitches"})), &l).unwrap();
+        assert_eq!(hitches.varied, ["knot", "mu"]);
+        let points: Vec<(String, f64, f64)> = (hitches.cases.iter())
+            .map(|c| (c.params.knot_label(), c.params.pole_radius(), c.params.mu))
+            .collect();
+        assert_eq!(points.len(), 10);
+        assert_eq!(points[0].1, 0.016);
+        assert_eq!(points[9].1, 0.032);
+        assert_eq!(points[0].0, "clove_hitch R = 0.016 m");
+        assert_eq!(points[9].0, "clove_hitch R = 0.032 m");
+        assert!(hitches.cases.iter().all(|c| c.params.h == 1.6e-3));
         let bad = spec(serde_json::json!({"grid": {"knot": [
             "figure_eight",
             {"knot": "overhand", "mu": 0.2},

@@ -5,6 +5,7 @@ use solver::case::{CaseParams, InitialShape, KnotKind};
 use solver::knot::{Bend, BendSpec, StartShape};
 use solver::rod::End;
 
+/// The bends tied as two interlocked bights (the fisherman's: tests/fisherman.rs).
 const BENDS: [Bend; 4] = [Bend::Reef, Bend::Granny, Bend::Thief, Bend::Grief];
 
 fn tie(bend: Bend) -> (BendSpec, StartShape) {
@@ -116,6 +117,7 @@ fn crossing_signs_tell_the_reef_from_the_granny() {
         match bend {
             Bend::Reef | Bend::Thief => assert_eq!(sum, 0.0, "{bend:?}: {signs:?}"),
             Bend::Granny | Bend::Grief => assert_eq!(sum.abs(), 6.0, "{bend:?}: {signs:?}"),
+            Bend::Fisherman => unreachable!("not among BENDS: tests/fisherman.rs"),
         }
     }
 }

@@ -13,6 +13,9 @@ const knotKeys = (p) =>
     ? ["n"]
     : ["knot", ...(p.knot === "braid" ? ["braid_word"] : []), ...(p.knot === "clove_hitch" ? ["cylinder_radius"] : [])];
 
+/** An event's kind in words. */
+const EVENT_WORDS = { inversion: "inversion", flip_back: "flip back", snap: "snap", slip_through: "slip through" };
+
 /** A stage's given fields as text (" to_l_k_bar 120"), its null ones left out. */
 const stageArgs = (stage) => Object.entries(Object.values(stage)[0] || {})
   .filter(([, v]) => v !== null && v !== undefined).map(([k, v]) => ` ${esc(k)} ${esc(v)}`).join(",");
@@ -44,7 +47,8 @@ export async function casePage(main, id) {
   const cylinder = (r && ((r.summary && r.summary.cylinder) || r.cylinder)) || null;
   // A bend's or a hitch's holding force (the largest F bar before the rods part) and whether it still holds.
   const holding = typeof summary.holding_force_bar === "number" ? { force: summary.holding_force_bar, tied: summary.tied } : null;
-  const invIndex = snapshots.findIndex((f) => about(f).at_event && (!firstEvent || about(f).event === firstEvent.kind));
+  const atEvent = snapshots.findIndex((f) => about(f).at_event && (!firstEvent || about(f).event === firstEvent.kind));
+  const invIndex = atEvent >= 0 ? atEvent : snapshots.findIndex((f) => about(f).at_event);
   $("#case").innerHTML = `
     <p><span class="status s-${esc(c.status)}">${esc(c.status)}</span>
       ${r && r.reason ? `<strong>${esc(r.reason)}</strong>` : c.last_error ? `<strong>${esc(c.last_error)}</strong>` : ""}
@@ -74,7 +78,7 @@ export async function casePage(main, id) {
       <div class="plots"><div id="plot-f" class="plot"></div><div id="plot-h" class="plot"></div></div>
       ${events.length ? `<div class="table-wrap"><table class="events" id="events"><thead><tr><th scope="col">Stage</th><th scope="col">Event</th><th scope="col">${LK}</th>
         <th scope="col">${FB} before → after</th><th scope="col">${HB} before → after</th><th scope="col">Kinetic energy ×</th><th scope="col">Clean</th></tr></thead><tbody>
-        ${events.map((e) => `<tr data-kind="${esc(e.kind)}"><td>${e.stage + 1}. ${esc(stageKind(stages[e.stage]))} (${esc(e.direction)})</td><td>${e.kind === "flip_back" ? "flip back" : "inversion"}</td>
+        ${events.map((e) => `<tr data-kind="${esc(e.kind)}"><td>${e.stage + 1}. ${esc(stageKind(stages[e.stage]))} (${esc(e.direction)})</td><td>${esc(EVENT_WORDS[e.kind] || e.kind)}</td>
           <td>${fmt(e.l_k_bar, 2)}</td><td>${fmt(e.F_bar_before, 4)} → ${fmt(e.F_bar_after, 4)}</td><td>${fmt(e.H_bar_before, 3)} → ${fmt(e.H_bar_after, 3)}</td>
           <td>${fmt(e.kinetic_energy_ratio, 1)}</td><td>${e.clean ? "yes" : "no"}</td></tr>`).join("")}</tbody></table></div>` : ""}
       <h3>Energies</h3><div class="plots"><div id="plot-e" class="plot"></div></div></section>

@@ -1,7 +1,7 @@
 //! `xtask`: the benchmarks of BENCHMARKS.md and the store's sizes of docs/API.md
 //! (`cargo run --release -p xtask -- --help`).
 use clap::{Parser, Subcommand};
-use xtask::{bench_queue, bench_rods, bench_soak, store_sizes};
+use xtask::{bench_queue, bench_rods, bench_soak, fisherman, store_sizes};
 
 #[derive(Parser)]
 #[command(name = "xtask", about = "knotsweep's load generators and benchmarks")]
@@ -24,6 +24,9 @@ enum Command {
     /// What results take in the store: a report's series and snapshots as JSON and packed, or a SQLite store's files per result.
     #[command(name = "store-sizes")]
     StoreSizes(store_sizes::Args),
+    /// The fisherman's knot's sliding and stretching regimes from run reports (figure and markdown table).
+    #[command(name = "fisherman")]
+    Fisherman(fisherman::Args),
 }
 
 fn main() {
@@ -32,6 +35,7 @@ fn main() {
         Command::Soak(args) => bench_soak::run(args, &mut std::io::stdout()),
         Command::Rods(args) => bench_rods::run(args).map(|doc| print!("{doc}")),
         Command::StoreSizes(args) => store_sizes::run(args).map(|doc| print!("{doc}")),
+        Command::Fisherman(args) => fisherman::run(args).map(|doc| print!("{doc}")),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -72,6 +72,9 @@ pub enum KnotKind {
     Thief,
     /// The grief knot: the granny pulled by the other end of one rod.
     Grief,
+    /// The fisherman's knot: each rod's overhand knot round the other's
+    /// standing part ([`crate::knot::fisherman`]).
+    Fisherman,
     /// The clove hitch round a rigid, fixed cylinder ([`crate::knot::hitch`]).
     CloveHitch,
 }
@@ -91,6 +94,7 @@ impl KnotKind {
             KnotKind::Granny => Some(Bend::Granny),
             KnotKind::Thief => Some(Bend::Thief),
             KnotKind::Grief => Some(Bend::Grief),
+            KnotKind::Fisherman => Some(Bend::Fisherman),
             KnotKind::Overhand | KnotKind::FigureEight | KnotKind::Braid | KnotKind::CloveHitch => None,
         }
     }

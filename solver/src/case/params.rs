@@ -149,6 +149,7 @@ pub const PARAMETERS: &[Parameter] = &[
             "granny",
             "thief",
             "grief",
+            "fisherman",
             "clove_hitch",
         ]),
         null: None,
@@ -158,8 +159,8 @@ pub const PARAMETERS: &[Parameter] = &[
               clamped at both ends and pulled apart; its Alexander polynomial is checked on the start shape and \
               at the end and reported (alexander_initial, alexander_final: coefficients, lowest power first), and \
               the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends \
-              \"reef\", \"granny\", \"thief\" and \"grief\" tie two rods of length L together, pull their standing \
-              ends apart with the tails free until tight (max_force_bar, default 0.05) or until the rods slip \
+              \"reef\", \"granny\", \"thief\", \"grief\" and \"fisherman\" (two overhand knots, each round the \
+              other rod) tie two rods of length L together, pull their standing ends apart with the tails free until tight (max_force_bar, default 0.05) or until the rods slip \
               apart, and report whether the rods still hold each other and the holding force (the largest F bar \
               before they part), with l_k bar = (2L - the pulled clamps' distance) / h. \"clove_hitch\" ties the rod \
               round a rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls \
@@ -702,12 +703,14 @@ impl CaseParams {
     }
 
     /// The knot in a few words: `"overhand n = 3"`, `"figure_eight"`,
-    /// `"braid s1 s1 s1"` (the word as given).
+    /// `"braid s1 s1 s1"` (the word as given), `"clove_hitch R = 0.032 m"`
+    /// (a pole's radius when given).
     pub fn knot_label(&self) -> String {
-        match (self.knot, &self.braid_word) {
-            (KnotKind::Overhand, _) => format!("overhand n = {}", self.n),
-            (KnotKind::Braid, Some(word)) => format!("braid {}", word.trim()),
-            (kind, _) => kind.to_string(),
+        match (self.knot, &self.braid_word, self.cylinder_radius) {
+            (KnotKind::Overhand, ..) => format!("overhand n = {}", self.n),
+            (KnotKind::Braid, Some(word), _) => format!("braid {}", word.trim()),
+            (KnotKind::CloveHitch, _, Some(radius)) => format!("clove_hitch R = {radius} m"),
+            (kind, ..) => kind.to_string(),
         }
     }
 

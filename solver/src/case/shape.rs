@@ -231,6 +231,7 @@ fn bend(
         alexander: None,
         clamps: [clamps[0], clamps[1]],
         cylinder: None,
+        own_knots: false,
     })
 }
 

@@ -1,5 +1,6 @@
 //! Bends: two rods of length `L` tied together by two interlocked bights,
-//! the reef, granny, thief and grief knots (Patil et al., Science 2020).
+//! the reef, granny, thief and grief knots (Patil et al., Science 2020), or
+//! by two overhand knots, the fisherman's ([`super::fisherman`]).
 //!
 //! The shape, in radii h, in the plane `z = 0` up to the crossings: rod 0
 //! is a bight open to the left, its two legs `S` apart at its bend (a half
@@ -65,14 +66,18 @@ pub enum Bend {
     Granny,
     Thief,
     Grief,
+    /// Two overhand knots, each round the other rod's standing part.
+    Fisherman,
 }
 
 impl Bend {
-    /// Which rod lies on top at crossings c1 ... c6 (module documentation).
-    pub fn over(self) -> [usize; 6] {
+    /// Which rod lies on top at crossings c1 ... c6 of two interlocked
+    /// bights (module documentation); `None` for the fisherman's knot.
+    pub fn over(self) -> Option<[usize; 6]> {
         match self {
-            Bend::Reef | Bend::Thief => [0, 0, 1, 1, 0, 0],
-            Bend::Granny | Bend::Grief => [0, 1, 1, 0, 0, 1],
+            Bend::Reef | Bend::Thief => Some([0, 0, 1, 1, 0, 0]),
+            Bend::Granny | Bend::Grief => Some([0, 1, 1, 0, 0, 1]),
+            Bend::Fisherman => None,
         }
     }
 
@@ -89,6 +94,7 @@ impl Bend {
             Bend::Granny => "the granny knot",
             Bend::Thief => "the thief knot",
             Bend::Grief => "the grief knot",
+            Bend::Fisherman => "the fisherman's knot",
         }
     }
 }
@@ -109,6 +115,9 @@ impl BendSpec {
     /// The two rods' loose, contact-free start, each starting at its
     /// standing end (the pulled clamps: rod 0's start and rod 1's start).
     pub fn tie(&self) -> Result<StartShape, KnotError> {
+        let Some(over) = self.bend.over() else {
+            return super::fisherman::tie(self);
+        };
         let (h, length) = (self.radius, self.length);
         for (name, value) in [("length", length), ("radius", h)] {
             if !(value.is_finite() && value > 0.0) {
@@ -123,7 +132,6 @@ impl BendSpec {
             });
         }
         let spacing = edge.min(h) / 4.0;
-        let over = self.bend.over();
         let core = bight(spacing / h);
         let core_length = Dense::new(core.clone()).length() * h;
         // Each standing part reaches out at least as far as the tail.
@@ -192,6 +200,7 @@ impl BendSpec {
                 },
             ],
             cylinder: None,
+            own_knots: false,
         })
     }
 }

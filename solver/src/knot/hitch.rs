@@ -170,6 +170,7 @@ impl Family for CloveHitchSpec {
                 },
             ],
             cylinder: Some(cylinder),
+            own_knots: false,
         })
     }
 

@@ -6,7 +6,7 @@
 //! - [`figure_eight`]: the figure-eight knot `4_1`;
 //! - [`braid`]: the closure of any braid word on at most 5 strands;
 //! - [`bends`]: two rods tied together, the reef, granny, thief and grief
-//!   knots;
+//!   knots, and [`fisherman`]'s two overhand knots;
 //! - [`hitch`]: the clove hitch, one rod tied round a rigid, fixed cylinder.
 //!
 //! A family's knot is a [`StartShape`]: its rods' centre lines with the two
@@ -23,6 +23,7 @@ mod alexander;
 pub mod bends;
 pub mod braid;
 pub mod figure_eight;
+pub mod fisherman;
 pub mod hitch;
 pub mod overhand;
 mod polyline;
@@ -39,7 +40,7 @@ pub use overhand::{
     BRAID_MARGIN, KNOT_RADII, KnotShape, KnotSpec, MAX_EDGE_RADII, MAX_PASSES, MAX_RADIUS_RATIO, MIN_BEND,
     MIN_EDGES_PER_PASS, MIN_PITCH, Regions, build,
 };
-pub use polyline::closest_approach;
+pub use polyline::{closest_approach, self_contact_span};
 pub use start::{check_rods_clearance, checked_rod, checked_start};
 pub use topology::{
     TopologyError, close_open_curve, closed_knot_determinant, determinant_along, expected_determinant,
@@ -150,6 +151,10 @@ pub struct StartShape {
     pub clamps: [Clamp; 2],
     /// The rigid, fixed cylinder a hitch is tied round; `None` for a knot.
     pub cylinder: Option<crate::contact::Cylinder>,
+    /// Each rod of a bend ties a knot of its own: the fisherman's overhand
+    /// knots (found in the run by their self-contacts,
+    /// [`self_contact_span`]).
+    pub own_knots: bool,
 }
 
 impl StartShape {
@@ -175,6 +180,7 @@ impl StartShape {
                 },
             ],
             cylinder: None,
+            own_knots: false,
         }
     }
 

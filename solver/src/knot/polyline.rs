@@ -3,6 +3,7 @@
 use super::KnotError;
 use crate::contact::broad_phase::{BroadPhase, neighbour_gap, polyline_segments};
 use nalgebra::Vector3;
+use std::ops::Range;
 
 /// `count` nodes along the dense polyline from its start, consecutive nodes
 /// exactly `edge` apart (each next node is the first point of the polyline,
@@ -76,6 +77,22 @@ pub fn closest_approach(
         .filter(|p| !between_rods || segments[p.i].body != segments[p.j].body)
         .map(|p| p.closest.distance)
         .min_by(f64::total_cmp)
+}
+
+/// The nodes of the rod `points` (radius `h`, edges `edge`) from the first
+/// to the last segment that comes within `margin` of a non-neighbouring
+/// segment of its own surface: where the rod is knotted on itself; `None`
+/// if no two do.
+pub fn self_contact_span(points: &[Vector3<f64>], h: f64, edge: f64, margin: f64) -> Option<Range<usize>> {
+    let segments = polyline_segments(points, h, 0);
+    let mut broad = BroadPhase::new();
+    let pairs = broad
+        .find_pairs(&segments, &[neighbour_gap(2.0 * h, edge)], margin)
+        .expect("valid segments");
+    let (first, last) = (pairs.iter())
+        .filter(|p| p.closest.distance < 2.0 * h + margin)
+        .fold((usize::MAX, 0), |(lo, hi), p| (lo.min(p.i), hi.max(p.j)));
+    (first <= last).then_some(first..last + 2)
 }
 
 /// A dense polyline and its cumulative arc length.

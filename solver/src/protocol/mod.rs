@@ -33,8 +33,8 @@ mod twist;
 pub use crate::snapshot::{Snapshot, SnapshotContact};
 pub use adaptive::{ADAPTIVE_MAX_MU, ADAPTIVE_MAX_RATE, MAX_RESTARTS, Outcome, Phase, pulls_fast};
 pub use report::{
-    CaseReport, Event, EventKind, Hysteresis, PhaseSpan, Progress, QUASI_STATIC_LIMIT, QuasiStatic, Scaling,
-    Stats, Status,
+    BendSample, CaseReport, Event, EventKind, Hysteresis, PhaseSpan, Progress, QUASI_STATIC_LIMIT,
+    QuasiStatic, Scaling, Stats, Status,
 };
 
 use crate::case::{CaseParams, FieldError, ValidCase};

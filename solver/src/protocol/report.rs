@@ -200,11 +200,24 @@ pub struct BendSample {
     pub energy_bar: [f64; 2],
     /// The rods have come apart: they neither touch (no two segments within
     /// half a radius of each other's surface) nor bend (each rod's elastic
-    /// energy below 0.02 EI / h); a hitch's rod wraps its cylinder by less
-    /// than one and a half turns.
+    /// energy below 0.02 EI / h; rods with knots of their own, the
+    /// fisherman's, need only not touch); a hitch's rod wraps its cylinder
+    /// by less than one and a half turns.
     pub apart: bool,
     /// The tails are free (the bend has set).
     pub tails_free: bool,
+    /// The fisherman's knot's two overhand knots, each the span of its rod
+    /// that touches itself (`knot::self_contact_span`): the distance between
+    /// their nodes' centroids along the pull, over h (positive while rod
+    /// 0's, on rod 1's side, has not passed rod 1's); absent for other knots
+    /// and while an overhand is loose (no two of its strands touch).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub knots_apart_bar: Option<f64>,
+    /// The fisherman's two overhand knots (those spans) touch each other
+    /// (two of their segments within half a radius of each other's
+    /// surface); absent as the separation is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub knots_touch: Option<bool>,
 }
 
 impl CaseReport {

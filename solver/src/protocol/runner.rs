@@ -276,6 +276,8 @@ pub(super) struct Case<'a> {
     pub(super) clamps: [Clamp; 2],
     /// A hitch's cylinder.
     cylinder: Option<Cylinder>,
+    /// Each rod of a bend ties a knot of its own (the fisherman's).
+    own_knots: bool,
     /// The case's inertia and time unit.
     pub(super) scales: Scales,
     /// Unit vector from the start clamp to the finish clamp.
@@ -329,6 +331,7 @@ impl<'a> Case<'a> {
             expected: start.alexander.as_ref().map_or(0, Alexander::determinant),
             clamps: start.clamps,
             cylinder: start.cylinder,
+            own_knots: start.own_knots,
             scales: params.scales(),
             axis,
             program: params.program(),
@@ -776,19 +779,36 @@ impl<'a> Case<'a> {
             rods.get(i)
                 .map_or(0.0, |rod| energies::within(rod, 0..rod.nodes()) / energy_unit)
         });
+        let edge = rods[0].rest_len[0];
         let apart = match &self.cylinder {
             Some(cylinder) => knot::wrap_turns(&positions[0], cylinder).abs() < HITCH_SLIPPED_TURNS,
             None => {
-                let edge = rods[0].rest_len[0];
                 let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
-                near.is_none() && energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR)
+                // Rods with knots of their own bend however they lie.
+                let straight = self.own_knots || energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR);
+                near.is_none() && straight
             }
+        };
+        let spans = (self.own_knots).then(|| {
+            [0, 1].map(|r| knot::self_contact_span(&positions[r], params.h, edge, PARTED * params.h))
+        });
+        let (knots_apart_bar, knots_touch) = match spans {
+            Some([Some(a), Some(b)]) => {
+                let own = [positions[0][a].to_vec(), positions[1][b].to_vec()];
+                let centroid = |p: &[Vector3<f64>]| p.iter().sum::<Vector3<f64>>() / p.len() as f64;
+                let apart = (centroid(&own[0]) - centroid(&own[1])).dot(&self.axis) / params.h;
+                let touch = knot::closest_approach(&own, params.h, edge, PARTED * params.h, true).is_some();
+                (Some(apart), Some(touch))
+            }
+            _ => (None, None),
         };
         self.report.bend_series.push(BendSample {
             f_bar: forces.map(|f| f / force_unit(params)),
             energy_bar,
             apart,
             tails_free: !c.tails_held,
+            knots_apart_bar,
+            knots_touch,
         });
     }
 

@@ -70,6 +70,17 @@ impl Case<'_> {
         }
     }
 
+    /// The snapshots before a bend's slip, which parted its rods at
+    /// `parted` (the last sample), labelled as the slip's: those of a snap
+    /// within the window, the same parting seen as a fall of F bar, are
+    /// taken again from the history under the slip's label.
+    pub(super) fn slip_snapshots(&mut self, plan: &mut SnapshotPlan, parted: f64) {
+        self.report.snapshots.retain(|f| {
+            !(f.label.event() == Some(EventKind::Snap) && (f.l_k_bar - parted).abs() <= EVENT_WINDOW)
+        });
+        self.event_snapshots(plan, EventKind::SlipThrough, parted);
+    }
+
     /// The snapshots either side of the event at `at`, taken from the
     /// history (the detection lags the event).
     fn event_snapshots(&mut self, plan: &mut SnapshotPlan, kind: EventKind, at: f64) {

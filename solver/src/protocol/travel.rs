@@ -157,6 +157,8 @@ impl Case<'_> {
                 return Ok(true);
             }
         }
+        let parted = self.report.series.last().map_or(slip.at.l_k_bar, |s| s.l_k_bar);
+        self.slip_snapshots(&mut travel.snapshots, parted);
         self.record(Event {
             restarts: travel.restarts,
             ..slip

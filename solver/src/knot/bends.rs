@@ -35,8 +35,7 @@
 //! lower (reef, granny) or upper (rod 1 of the thief and grief) leg, and
 //! ends in a free tail [`TAIL`] radii past the other rod's bend.
 use super::polyline::{Dense, check_clearance_rods, equal_chords};
-use super::{Clamp, KnotError, StartShape};
-use crate::rod::End;
+use super::{KnotError, StartShape};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -185,23 +184,7 @@ impl BendSpec {
             })
             .collect::<Vec<_>>();
         check_clearance_rods(&rods, h, edge)?;
-        Ok(StartShape {
-            rods,
-            loop_middle: 0,
-            alexander: None,
-            clamps: [
-                Clamp {
-                    rod: 0,
-                    end: End::Start,
-                },
-                Clamp {
-                    rod: 1,
-                    end: End::Start,
-                },
-            ],
-            cylinder: None,
-            own_knots: false,
-        })
+        Ok(StartShape::two_rods(rods, false))
     }
 }
 

@@ -31,8 +31,7 @@
 //! is the run's to report, as for the other bends.
 use super::alexander::Alexander;
 use super::polyline::{Dense, check_clearance_rods, equal_chords};
-use super::{BendSpec, Clamp, KnotError, StartShape, check_knot};
-use crate::rod::End;
+use super::{BendSpec, KnotError, StartShape, check_knot};
 use nalgebra::{Vector2, Vector3};
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -142,23 +141,7 @@ pub(super) fn tie(spec: &BendSpec) -> Result<StartShape, KnotError> {
     for rod in &rods {
         check_knot(rod, &Alexander::torus_2(3))?;
     }
-    Ok(StartShape {
-        rods,
-        loop_middle: 0,
-        alexander: None,
-        clamps: [
-            Clamp {
-                rod: 0,
-                end: End::Start,
-            },
-            Clamp {
-                rod: 1,
-                end: End::Start,
-            },
-        ],
-        cylinder: None,
-        own_knots: true,
-    })
+    Ok(StartShape::two_rods(rods, true))
 }
 
 /// The uniform Catmull-Rom spline through `points`,

@@ -184,6 +184,19 @@ impl StartShape {
         }
     }
 
+    /// Two rods pulled by their starts (their standing ends), the other ends
+    /// free; `own_knots` when each rod ties a knot of its own.
+    pub fn two_rods(rods: Vec<Vec<Vector3<f64>>>, own_knots: bool) -> Self {
+        Self {
+            rods,
+            loop_middle: 0,
+            alexander: None,
+            clamps: [0, 1].map(|rod| Clamp { rod, end: End::Start }),
+            cylinder: None,
+            own_knots,
+        }
+    }
+
     /// Whether it is a bend (several rods).
     pub fn is_bend(&self) -> bool {
         self.rods.len() > 1

@@ -227,11 +227,11 @@ fn figure(runs: &[Run]) -> Result<String> {
             .into(),
         x_label: "l_k bar = (2L - the clamps' distance) / h".into(),
         y_label: "F bar".into(),
-        // Headroom above the curves for the legend.
-        y_range: Some((-0.002, 1.8 * largest)),
+        // Headroom above the curves for the legend, which sits under the marks' labels.
+        y_range: Some((-0.002, 2.2 * largest)),
         series: force,
         markers: markers.clone(),
-        legend: LegendAt::UpperLeft,
+        legend: LegendAt::Coordinate(12, 40),
         ..Plot::default()
     };
     let right = Plot {

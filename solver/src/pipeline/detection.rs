@@ -3,8 +3,8 @@
 //! penetrations the step's end leaves.
 use super::{Body, World, WorldError};
 use crate::contact::broad_phase::Segment;
-use crate::contact::curve::{Piece, closest_points_on_pieces};
-use crate::contact::segment::closest_points;
+use crate::contact::curve::{CurvePair, Piece, closest_points_on_pieces};
+use crate::contact::segment::{SegmentPair, closest_points};
 use crate::contact::{Candidates, ContactPoint, FrictionLaw, Geometry, narrow_phase};
 use crate::rod::Rod;
 use nalgebra::Vector3;
@@ -53,22 +53,35 @@ impl World {
         }
         let margin = self.contact.margin * largest_radius + 2.0 * fastest * dt;
         let smooth = self.contact.geometry == Geometry::Smooth;
+        self.pieces.clear();
+        self.deviations.clear();
+        if smooth {
+            for seg in &self.segments {
+                let rod = &self.rods[seg.body];
+                let piece = Piece::new(rod.nodes(), seg.index, |i| rod.node(i));
+                self.deviations.push(piece.chord_deviation_bound());
+                self.pieces.push(piece);
+            }
+        }
         // A smooth centre line strays from its chords by at most its pieces'
         // bound on both rods: the chords' search reaches that much further.
-        let reach = if smooth {
-            2.0 * largest_chord_deviation(&self.rods)
-        } else {
-            0.0
-        };
+        let reach = 2.0 * self.deviations.iter().fold(0.0, |m: f64, &d| m.max(d));
         let pairs = self
             .broad
             .find_pairs_reusing(&self.segments, &self.gaps, margin + reach, SKIN * largest_radius)
             .map_err(|e| WorldError::Detection(e.to_string()))?;
         self.curves.clear();
         if smooth {
+            // A pair whose chords lie further apart than a contact reaches
+            // plus both pieces' bounds cannot touch: no closest points.
             self.curves.extend(pairs.iter().map(|p| {
-                let (a, b) = pieces(&self.rods, &self.segments[p.i], &self.segments[p.j]);
-                closest_points_on_pieces(&a, &b)
+                let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
+                let beyond = sa.radius + sb.radius + margin + self.deviations[p.i] + self.deviations[p.j];
+                if p.closest.distance >= beyond {
+                    apart(&p.closest)
+                } else {
+                    closest_points_on_pieces(&self.pieces[p.i], &self.pieces[p.j])
+                }
             }));
             narrow_phase::merge_close_curves(
                 pairs,
@@ -105,12 +118,12 @@ impl World {
                 if curve.distance >= contact_distance + margin {
                     continue;
                 }
-                let (a, b) = pieces(&self.rods, sa, sb);
+                let (a, b) = (&self.pieces[p.i], &self.pieces[p.j]);
                 let stencil =
                     |piece: &Piece, u: f64, first: usize| (piece.nodes.map(|i| first + i), piece.weights(u));
                 ContactPoint::from_curves(
-                    stencil(&a, curve.s, oa),
-                    stencil(&b, curve.t, ob),
+                    stencil(a, curve.s, oa),
+                    stencil(b, curve.t, ob),
                     curve,
                     contact_distance,
                     mu,
@@ -227,15 +240,18 @@ fn pieces(rods: &[Rod], sa: &Segment, sb: &Segment) -> (Piece, Piece) {
     (piece(sa), piece(sb))
 }
 
-/// The largest [`Piece::chord_deviation_bound`] over the rods' pieces.
-fn largest_chord_deviation(rods: &[Rod]) -> f64 {
-    let mut largest: f64 = 0.0;
-    for rod in rods {
-        for e in 0..rod.edges() {
-            largest = largest.max(Piece::new(rod.nodes(), e, |i| rod.node(i)).chord_deviation_bound());
-        }
+/// A candidate pair whose pieces cannot touch: its chords' closest points
+/// at distance infinity, so that merging takes it last and no contact
+/// comes of it ([`narrow_phase::merge_close_curves`] lets only nearer pairs
+/// drop a pair).
+fn apart(chords: &SegmentPair) -> CurvePair {
+    CurvePair {
+        s: chords.s,
+        t: chords.t,
+        point_a: chords.point_a,
+        point_b: chords.point_b,
+        distance: f64::INFINITY,
     }
-    largest
 }
 
 /// The relative velocity of contact `c`'s points at the start of the step.

@@ -24,7 +24,7 @@ mod warm_start;
 
 pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
-use crate::contact::curve::CurvePair;
+use crate::contact::curve::{CurvePair, Piece};
 use crate::contact::gauss_seidel::GaussSeidel;
 use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve, Cylinder};
 use crate::counters::Counters;
@@ -86,6 +86,10 @@ pub struct World {
     broad: BroadPhase,
     gauss_seidel: GaussSeidel,
     segments: Vec<Segment>,
+    /// Each segment's piece of the smooth centre line at the step's start
+    /// and the piece's [`crate::contact::curve::Piece::chord_deviation_bound`].
+    pieces: Vec<Piece>,
+    deviations: Vec<f64>,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
     /// Which of `curves` stay after merging near-duplicates, and the merge's
@@ -171,6 +175,8 @@ impl World {
             broad: BroadPhase::new(),
             gauss_seidel: GaussSeidel::new(),
             segments: Vec::new(),
+            pieces: Vec::new(),
+            deviations: Vec::new(),
             curves: Vec::new(),
             merge_keep: Vec::new(),
             merge_order: Vec::new(),

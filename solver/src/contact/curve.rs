@@ -73,7 +73,7 @@ struct Jet {
 /// given the Hermite basis `(h00, h10, h01, h11)` at `u` (or its derivatives).
 #[inline]
 fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
-    let c = smoothing();
+    let c = SMOOTHING;
     let (a, b) = (h10 / 12.0, h11 / 12.0);
     let (p, q) = (0.5 * c * h00, 0.5 * c * h01);
     [
@@ -85,14 +85,6 @@ fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
         -b,
     ]
 }
-
-/// MEASUREMENT HOOK (reverted by the next commit): the smoothing fraction
-/// from `KS_SMOOTHING` (default 0, the curve through the nodes).
-fn smoothing() -> f64 {
-    static C: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
-    *C.get_or_init(|| std::env::var("KS_SMOOTHING").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0))
-}
-
 
 /// Control-point weights at `u` and their first two derivatives.
 #[inline]
@@ -199,8 +191,8 @@ impl Piece {
         let d = c[1] - c[0];
         let m0 = (c[4] - 8.0 * c[2] + 8.0 * c[1] - c[3]) / 12.0;
         let m1 = (c[2] - 8.0 * c[0] + 8.0 * c[3] - c[5]) / 12.0;
-        let d0 = smoothing() * (0.5 * (c[2] + c[1]) - c[0]);
-        let d1 = smoothing() * (0.5 * (c[0] + c[3]) - c[1]);
+        let d0 = SMOOTHING * (0.5 * (c[2] + c[1]) - c[0]);
+        let d1 = SMOOTHING * (0.5 * (c[0] + c[3]) - c[1]);
         d0.norm().max(d1.norm()) + 4.0 / 27.0 * ((m0 - d).norm() + (m1 - d).norm())
     }
 }
@@ -381,7 +373,11 @@ mod tests {
         let a = PI / 6.0;
         let sag = 1.0 - (0.5 * a).cos();
         let offset = SMOOTHING * (1.0 - a.cos());
-        assert!((offset / sag - 0.5).abs() < 0.01, "half the sag: {}", offset / sag);
+        assert!(
+            (offset / sag - 0.5).abs() < 0.01,
+            "half the sag: {}",
+            offset / sag
+        );
         for e in 2..10 {
             let p = Piece::new(x.len(), e, |i| x[i]);
             for k in 0..=20 {
@@ -520,6 +516,10 @@ mod tests {
         );
         assert!(hi - lo < 1e-2 * sag, "the curve swings by {}", hi - lo);
         let inside = SMOOTHING * radius * (1.0 - edge_angle.cos());
-        assert!((lo - 1.0 - inside).abs() < 1e-2 * sag, "{lo} against {}", 1.0 + inside);
+        assert!(
+            (lo - 1.0 - inside).abs() < 1e-2 * sag,
+            "{lo} against {}",
+            1.0 + inside
+        );
     }
 }

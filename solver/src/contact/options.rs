@@ -62,7 +62,7 @@ pub enum Candidates {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Geometry {
-    /// The C1 curves through the nodes ([`super::curve`]): gap, normal,
+    /// The C1 curves through the smoothed nodes ([`super::curve`]): gap, normal,
     /// contact points and the forces' weights on the nodes vary smoothly as
     /// one rod slides along another, so a pull meets no washboard at the
     /// edges' scale.

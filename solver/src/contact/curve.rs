@@ -36,8 +36,9 @@ pub const STENCIL: usize = 6;
 
 /// How far each node moves towards its neighbours' midpoint before the
 /// curve interpolates it: half the chords' sag inside the circle through
-/// the nodes (module doc). n = 3's inversion is then about as far from its
-/// converged value at the paper's K = 301 as at 451 (docs/FIDELITY.md).
+/// the nodes (module doc). n = 3's inversion then moves by 1.0 in l_k bar
+/// from the paper's K = 301 to 601, where the curve through the nodes
+/// moves by 4.2 (docs/FIDELITY.md).
 pub const SMOOTHING: f64 = 1.0 / 8.0;
 
 /// Node offsets from `e` in stencil order.

@@ -183,7 +183,8 @@ impl Case<'_> {
 
     /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
     /// own length `arc`: back to a checkpoint when the fast approach sees an
-    /// event (returns `true`), checkpoints while fast, fast again past the
+    /// event or, in an overhand knot, a smeared snap of H bar (returns
+    /// `true`), checkpoints while fast, fast again past the
     /// event or after a false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
@@ -193,7 +194,7 @@ impl Case<'_> {
         arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
-        if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
+        if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
                 let back = way.back(began, way.restart_before(self.turns()));
                 if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
@@ -387,26 +388,25 @@ impl Case<'_> {
     }
 
     /// Detects the current stage's first event in its own samples; returns
-    /// it when found at this sample.
+    /// it when found at this sample. The overhand knot's events are read on
+    /// its loop's height H bar ([`events::detect`]); every other knot's on
+    /// F bar ([`events::detect_snap`], tightening only: H bar, found from
+    /// the contacts around the middle node, jumps between a figure-eight's
+    /// or a braid closure's lobes, and a bend has none), from the tails'
+    /// release on when they were held ([`Case::snap_watch`]).
     fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
         if travel.event.is_some() {
             return None;
         }
         let criteria = self.criteria();
-        let found = if self.is_bend() {
-            (travel.way.0 > 0.0)
-                .then(|| {
-                    events::detect_bend_snap(&self.report.series, travel.first_sample, &criteria, self.stage)
-                })
-                .flatten()
+        let first = travel.first_sample;
+        let found = if self.reads_loop() {
+            events::detect(&self.report.series, first, travel.way, &criteria, self.stage)
+        } else if travel.way.0 > 0.0 {
+            self.snap_watch(first)
+                .and_then(|from| events::detect_snap(&self.report.series, from, &criteria, self.stage))
         } else {
-            events::detect(
-                &self.report.series,
-                travel.first_sample,
-                travel.way,
-                &criteria,
-                self.stage,
-            )
+            None
         }
         .map(|e| Event {
             restarts: travel.restarts,
@@ -414,10 +414,30 @@ impl Case<'_> {
         });
         travel.event = found;
         if let Some(event) = found {
-            let reported = events::reported(&self.report.series, travel.first_sample, &criteria, event);
+            let reported = events::reported(&self.report.series, first, &criteria, event);
             self.record(reported);
         }
         found
+    }
+
+    /// Whether the knot's events are read on its loop's height H bar: the
+    /// overhand knot's (the builder's or a user's), paper Fig. 5.
+    fn reads_loop(&self) -> bool {
+        self.params.knot == KnotKind::Overhand
+    }
+
+    /// The first sample of the stage starting at `first` that the snap
+    /// detector watches: a bend's or a hitch's first with the tails free (F
+    /// bar's fall as the setting load is let go is no snap; `None` while
+    /// they are held), any other knot's first.
+    fn snap_watch(&self, first: usize) -> Option<usize> {
+        if !self.is_bend() {
+            return Some(first);
+        }
+        let freed = self.report.bend_series[first..]
+            .iter()
+            .position(|b| b.tails_free)?;
+        Some(first + freed)
     }
 
     /// Frees the clamps along the pull (the axis is x, checked at submit

@@ -235,8 +235,8 @@ mod tests {
     /// A knot's snap is read on F bar from `from` on: a fall of F bar (0.05
     /// to 0.02 at l_k bar 280) with a burst of kinetic energy is a snap with
     /// the force's fall and no H bar; the same fall without the burst, or H
-    /// bar falling while F bar holds, is none; a window starting within 10 of
-    /// the fall does not see it.
+    /// bar falling while F bar holds, is none, and so is the fall for a
+    /// detector watching from its foot on.
     #[test]
     fn a_snap_is_a_fall_of_the_force_with_a_burst() {
         let criteria = InversionCriteria::default();
@@ -257,7 +257,7 @@ mod tests {
         assert_eq!((snap.at.f_bar_before, snap.at.f_bar_after), (0.05, 0.02));
         assert_eq!((snap.at.h_bar_before, snap.at.h_bar_after), (0.0, 0.0));
         assert_eq!(detect_snap(&force(|_| false), 0, &criteria, 3), None);
-        assert_eq!(detect_snap(&bursting, 30, &criteria, 3), None);
+        assert_eq!(detect_snap(&bursting, 40, &criteria, 3), None);
         let loop_only = series(
             1.0,
             |l| if l > 280.0 { 0.3 } else { 0.05 },

@@ -44,6 +44,12 @@ pub(super) struct Travel {
     watch_from: usize,
     /// Restarts the stage has taken (carried over a restore).
     restarts: u32,
+    /// Where (the knot's own length) the fast approach let a bend's or a
+    /// hitch's tails go at the last sample.
+    released: Option<f64>,
+    /// The slow phase goes through the tails' release (after the fast
+    /// approach let them go): fast again `SLOW_AFTER` past it.
+    slow_release: bool,
 }
 
 /// The state a fast approach can return to.
@@ -93,6 +99,8 @@ impl Case<'_> {
             reviewed: false,
             watch_from: first_sample,
             restarts: 0,
+            released: None,
+            slow_release: false,
         };
         self.enter(&mut travel, phase);
         let mut saved = Checkpoints::new(start);
@@ -109,7 +117,9 @@ impl Case<'_> {
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
             if self.is_bend() && way.0 > 0.0 {
                 let f_bar = self.report.series.last().map_or(0.0, |s| s.f_bar);
-                self.release_tails(f_bar);
+                if self.release_tails(f_bar) && travel.phase == Phase::Approach {
+                    travel.released = Some(self.l_k_arc_bar());
+                }
             }
             if self.report.bend_series.last().is_some_and(|b| b.apart) {
                 if self.slipped(&mut travel, &mut saved)? {
@@ -183,8 +193,8 @@ impl Case<'_> {
 
     /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
     /// own length `arc`: back to a checkpoint when the fast approach sees an
-    /// event or, in an overhand knot, a smeared snap of H bar (returns
-    /// `true`), checkpoints while fast, fast again past the
+    /// event, lets a bend's or a hitch's tails go or, in an overhand knot,
+    /// sees a smeared snap of H bar (returns `true`), checkpoints while fast, fast again past the
     /// event or after a false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
@@ -194,6 +204,21 @@ impl Case<'_> {
         arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
+        if let Some(at) = travel.released.take() {
+            // The fast approach let the tails go: the knot's response to the
+            // setting load let go (its holding force, or its slip) is met at
+            // `pull_speed`, as an event is.
+            if self.restart(
+                travel,
+                saved,
+                way.back(at, way.restart_before(None)),
+                Some(at),
+                Outcome::Restarted,
+            )? {
+                travel.slow_release = true;
+                return Ok(true);
+            }
+        }
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
                 let back = way.back(began, way.restart_before(self.turns()));
@@ -234,6 +259,13 @@ impl Case<'_> {
                 self.enter(travel, Phase::After);
             }
             (Phase::Snap | Phase::Fallback, None)
+                if travel.slow_release && self.released_behind(travel, arc) =>
+            {
+                self.end_phase(Outcome::Confirmed);
+                travel.slow_release = false;
+                self.enter(travel, Phase::After);
+            }
+            (Phase::Snap | Phase::Fallback, None)
                 if travel
                     .fast_event
                     .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
@@ -254,6 +286,15 @@ impl Case<'_> {
             _ => self.drive(travel, l_k_bar),
         }
         Ok(false)
+    }
+
+    /// Whether the stage let the tails go `SLOW_AFTER` or more before `arc`
+    /// (the knot's own length).
+    fn released_behind(&self, travel: &Travel, arc: f64) -> bool {
+        let freed = (self.report.bend_series.get(travel.first_sample..))
+            .and_then(|b| b.iter().position(|b| b.tails_free))
+            .map(|i| self.report.series[travel.first_sample + i].l_k_arc_bar);
+        freed.is_some_and(|at| travel.way.reached(arc, travel.way.on(at, SLOW_AFTER)))
     }
 
     /// Back to the latest checkpoint at or before `before` (the knot's own

@@ -383,22 +383,55 @@ impl Default for InversionCriteria {
     }
 }
 
+/// What a snap is read on ([`detect_fall`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reading {
+    /// H bar, the overhand knot's loop (paper Fig. 5): a sample without a
+    /// loop (width 0) does not drop, and F bar's own fall confirms a drop as
+    /// the kinetic energy does.
+    LoopHeight,
+    /// F bar: only the kinetic energy confirms its fall (the force's fall is
+    /// the drop itself); the found snap's H bar before and after are 0.
+    Force,
+}
+
+impl Reading {
+    /// The value that drops.
+    fn level(self, s: &Sample) -> f64 {
+        match self {
+            Reading::LoopHeight => s.h_bar,
+            Reading::Force => s.f_bar,
+        }
+    }
+
+    /// Whether sample `s` may be a drop.
+    fn may_drop(self, s: &Sample) -> bool {
+        self == Reading::Force || s.width > 0.0
+    }
+}
+
 /// The first sudden drop of H bar that the kinetic energy confirms, and the
-/// force drop around it (paper Fig. 5). Samples are ordered by decreasing l_k bar;
-/// sample j drops when its H bar is at most `drop_fraction` times the largest H
-/// bar of the samples within `window` before it. The snap is confirmed when the
-/// peak kinetic energy from that largest-H sample to a few samples after j
-/// exceeds the median over the samples before the drop began by
-/// `kinetic_energy_spike`, or when F bar falls within those samples to
-/// `force_drop` times its value before the drop (Fig. 5 a: F bar "rapidly
-/// decreases" at the inversion; a slow snap of rolling strands may stir little
-/// kinetic energy).
+/// force drop around it (paper Fig. 5): [`detect_fall`] read on H bar.
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
+    detect_fall(series, criteria, Reading::LoopHeight)
+}
+
+/// The first sudden fall of `reading` that the kinetic energy confirms, and
+/// the force drop around it. Samples are ordered by decreasing l_k bar;
+/// sample j drops when its value is at most `drop_fraction` times the
+/// largest value of the samples within `window` before it. The snap is
+/// confirmed when the peak kinetic energy from that largest sample to a few
+/// samples after j exceeds the median over the samples before the drop
+/// began by `kinetic_energy_spike`, or, reading H bar, when F bar falls
+/// within those samples to `force_drop` times its value before the drop
+/// (Fig. 5 a: F bar "rapidly decreases" at the inversion; a slow snap of
+/// rolling strands may stir little kinetic energy).
+pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Reading) -> Option<Inversion> {
     for j in 1..series.len() {
         let drop = &series[j];
         // A drop is judged against a full window of history (the first
         // samples of a pull may still carry the relaxation's transients).
-        if drop.width <= 0.0 || series[0].l_k_bar - drop.l_k_bar < criteria.window {
+        if !reading.may_drop(drop) || series[0].l_k_bar - drop.l_k_bar < criteria.window {
             continue;
         }
         let Some((start, reference)) = series[..j]
@@ -406,12 +439,12 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
             .enumerate()
             .rev()
             .take_while(|(_, s)| s.l_k_bar - drop.l_k_bar <= criteria.window)
-            .map(|(i, s)| (i, s.h_bar))
+            .map(|(i, s)| (i, reading.level(s)))
             .max_by(|a, b| a.1.total_cmp(&b.1))
         else {
             continue;
         };
-        if reference <= 0.0 || drop.h_bar > criteria.drop_fraction * reference {
+        if reference <= 0.0 || reading.level(drop) > criteria.drop_fraction * reference {
             continue;
         }
         let before = &series[j - 1];
@@ -432,18 +465,24 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
             .iter()
             .map(|s| s.f_bar)
             .fold(f64::INFINITY, f64::min);
-        let force_dropped = before.f_bar > 0.0 && f_after <= criteria.force_drop * before.f_bar;
+        let force_dropped = reading == Reading::LoopHeight
+            && before.f_bar > 0.0
+            && f_after <= criteria.force_drop * before.f_bar;
         if ratio < criteria.kinetic_energy_spike && !force_dropped {
             continue;
         }
+        let (h_bar_before, h_bar_after) = match reading {
+            Reading::LoopHeight => (before.h_bar, drop.h_bar),
+            Reading::Force => (0.0, 0.0),
+        };
         return Some(Inversion {
             l_k_bar: before.l_k_bar,
             l_k_arc_bar: before.l_k_arc_bar,
             l_c_over_l: before.l_c_over_l,
             f_bar_before: before.f_bar,
             f_bar_after: f_after,
-            h_bar_before: before.h_bar,
-            h_bar_after: drop.h_bar,
+            h_bar_before,
+            h_bar_after,
             kinetic_energy_ratio: ratio,
             sample: j - 1,
         });

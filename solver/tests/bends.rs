@@ -192,7 +192,10 @@ fn bend_cases_are_checked_naming_the_field() {
 /// alike and the two rods, which a half turn swaps, hold the same energy,
 /// at every sample (within 1 % and 2 % where F bar is above a tenth of its
 /// largest); the case completes with the rods parted or tight, its holding
-/// force the largest F bar with the tails free.
+/// force the largest F bar with the tails free. F bar falls as the tails
+/// are let go (the setting load released: to below `drop_fraction` of its
+/// value within the next samples), and no snap is reported there: every
+/// snap lies past the release's fall.
 #[test]
 fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
     let params = CaseParams {
@@ -240,6 +243,26 @@ fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
         .any(|e| e.kind == solver::protocol::EventKind::SlipThrough);
     assert_eq!(report.tied, Some(!slipped));
     assert!(report.alexander_initial.is_none() && report.determinant_final.is_none());
+    let criteria = solver::measurements::InversionCriteria::default();
+    let freed = (report.bend_series.iter().position(|b| b.tails_free)).expect("the tails are let go");
+    let set = report.series[freed - 1];
+    let (low, after) = (freed..(freed + 4).min(report.series.len()))
+        .map(|i| (i, report.series[i].f_bar))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("samples after the release");
+    assert!(
+        after <= criteria.drop_fraction * set.f_bar,
+        "the release lets F bar fall: {} -> {after}",
+        set.f_bar
+    );
+    for snap in (report.events.iter()).filter(|e| e.kind == solver::protocol::EventKind::Snap) {
+        assert!(
+            snap.at.sample > low,
+            "a snap at the release (l_k bar {}, F bar {} -> {after}): {snap:?}",
+            set.l_k_bar,
+            set.f_bar
+        );
+    }
 }
 
 /// docs/validation/starts/reef.json, the start shape docs/API.md's command

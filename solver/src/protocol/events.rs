@@ -1,13 +1,16 @@
-//! Events in a stage's own samples: an inversion while the knot tightens
-//! ([`measurements::detect_inversion`], paper Fig. 5), the loop flipping back
-//! while it loosens ([`measurements::detect_flip_back`]).
+//! Events in a stage's own samples: the overhand knot's inversion while it
+//! tightens ([`measurements::detect_inversion`], paper Fig. 5) and its loop
+//! flipping back while it loosens ([`measurements::detect_flip_back`]); any
+//! other knot's snap while it tightens ([`detect_snap`]) and a bend's or a
+//! hitch's slip-through.
 use super::adaptive::Way;
 use super::report::{BendSample, Event, EventKind};
 use crate::case::Direction;
-use crate::measurements::{self, InversionCriteria, Sample};
+use crate::measurements::{self, InversionCriteria, Reading, Sample};
 
-/// The first event of the stage `stage` whose samples start at `first` in
-/// `series`, moving `way`; its sample index is the series'.
+/// The overhand knot's first event (read on H bar) in the stage `stage`
+/// whose samples start at `first` in `series`, moving `way`; its sample
+/// index is the series'.
 pub(super) fn detect(
     series: &[Sample],
     first: usize,
@@ -70,36 +73,20 @@ pub(super) fn reported(series: &[Sample], first: usize, criteria: &InversionCrit
     }
 }
 
-/// The first snap of a bend's stage whose samples start at `first` in
-/// `series` (a tightening): [`measurements::detect_inversion`] read on F bar
-/// in place of H bar, so that F bar must fall to `drop_fraction` of its
-/// largest value within `window` before and the kinetic energy must burst
-/// (`kinetic_energy_spike`); its sample index is the series'.
-pub(super) fn detect_bend_snap(
+/// The first snap of a tightening stage, a knot's other than the
+/// overhand's, in the samples of `series` from `from` on (those the detector
+/// watches, [`super::travel`]): [`measurements::detect_fall`] read on F bar,
+/// which must fall to `drop_fraction` of its largest value within `window`
+/// before with a burst of kinetic energy (`kinetic_energy_spike`); its
+/// sample index is the series'.
+pub(super) fn detect_snap(
     series: &[Sample],
-    first: usize,
+    from: usize,
     criteria: &InversionCriteria,
     stage: usize,
 ) -> Option<Event> {
-    let own = &series[first..];
-    let as_height: Vec<Sample> = own
-        .iter()
-        .map(|s| Sample {
-            width: 1.0,
-            h_bar: s.f_bar,
-            f_bar: 0.0,
-            ..*s
-        })
-        .collect();
-    let mut at = measurements::detect_inversion(&as_height, criteria)?;
-    let hi = (at.sample + 5).min(own.len());
-    at.f_bar_before = own[at.sample].f_bar;
-    at.f_bar_after = own[at.sample + 1..hi]
-        .iter()
-        .map(|s| s.f_bar)
-        .fold(f64::INFINITY, f64::min);
-    (at.h_bar_before, at.h_bar_after) = (0.0, 0.0);
-    at.sample += first;
+    let mut at = measurements::detect_fall(&series[from..], criteria, Reading::Force)?;
+    at.sample += from;
     Some(Event {
         stage,
         direction: Direction::Tighten,
@@ -243,5 +230,39 @@ mod tests {
             first + 39,
             "l_k bar 319.5 (before the rise) is the release's 40th sample"
         );
+    }
+
+    /// A knot's snap is read on F bar from `from` on: a fall of F bar (0.05
+    /// to 0.02 at l_k bar 280) with a burst of kinetic energy is a snap with
+    /// the force's fall and no H bar; the same fall without the burst, or H
+    /// bar falling while F bar holds, is none, and so is the fall for a
+    /// detector watching from its foot on.
+    #[test]
+    fn a_snap_is_a_fall_of_the_force_with_a_burst() {
+        let criteria = InversionCriteria::default();
+        let force = |spike: fn(f64) -> bool| {
+            let mut all = series(1.0, |l| if l > 280.0 { 0.3 } else { 0.05 }, spike);
+            for s in &mut all {
+                s.f_bar = if s.l_k_bar > 280.0 { 0.05 } else { 0.02 };
+            }
+            all
+        };
+        let bursting = force(|l| (279.0..281.0).contains(&l));
+        let snap = detect_snap(&bursting, 0, &criteria, 3).expect("a snap");
+        assert_eq!(
+            (snap.kind, snap.direction, snap.stage),
+            (EventKind::Snap, Direction::Tighten, 3)
+        );
+        assert_eq!((snap.at.l_k_bar, snap.at.sample), (280.5, 39));
+        assert_eq!((snap.at.f_bar_before, snap.at.f_bar_after), (0.05, 0.02));
+        assert_eq!((snap.at.h_bar_before, snap.at.h_bar_after), (0.0, 0.0));
+        assert_eq!(detect_snap(&force(|_| false), 0, &criteria, 3), None);
+        assert_eq!(detect_snap(&bursting, 40, &criteria, 3), None);
+        let loop_only = series(
+            1.0,
+            |l| if l > 280.0 { 0.3 } else { 0.05 },
+            |l| (279.0..281.0).contains(&l),
+        );
+        assert_eq!(detect_snap(&loop_only, 0, &criteria, 3), None);
     }
 }

@@ -68,12 +68,14 @@ pub struct Stats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EventKind {
-    /// The loop snaps through the braid while the knot tightens (paper Fig. 5).
+    /// The overhand knot's loop snaps through the braid while the knot
+    /// tightens (paper Fig. 5).
     Inversion,
     /// The loop flips back while the knot loosens (the simplified model's
     /// second fold, Sec. 5).
     FlipBack,
-    /// A bend's snap: F bar drops suddenly with a burst of kinetic energy.
+    /// A snap of any knot but the overhand (whose loop's snap is an
+    /// inversion): F bar drops suddenly with a burst of kinetic energy.
     Snap,
     /// A bend slips through: its rods part. `F_bar_before` is the holding
     /// force, the largest F bar of the stage before they parted, at `l_k_bar`.

@@ -379,10 +379,10 @@ impl<'a> Case<'a> {
     /// are loaded).
     /// A hitch's tail is its second clamp: from then on it hangs a weight
     /// ([`HITCH_TAIL_FORCE_BAR`]) and its standing end alone is pulled,
-    /// against the cylinder.
-    pub(super) fn release_tails(&mut self, f_bar: f64) {
+    /// against the cylinder. Returns whether it freed them now.
+    pub(super) fn release_tails(&mut self, f_bar: f64) -> bool {
         if !self.carried.tails_held || f_bar < BEND_SET_FORCE_BAR {
-            return;
+            return false;
         }
         self.carried.tails_held = false;
         let freed = match self.cylinder {
@@ -409,6 +409,7 @@ impl<'a> Case<'a> {
             at,
             self.clock.elapsed,
         ));
+        true
     }
 
     /// Puts a hitch's tail load on its tail end, added to the sliding

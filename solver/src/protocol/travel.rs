@@ -44,6 +44,12 @@ pub(super) struct Travel {
     watch_from: usize,
     /// Restarts the stage has taken (carried over a restore).
     restarts: u32,
+    /// Where (the knot's own length) the fast approach let a bend's or a
+    /// hitch's tails go at the last sample.
+    released: Option<f64>,
+    /// The slow phase goes through the tails' release (after the fast
+    /// approach let them go): fast again `SLOW_AFTER` past it.
+    slow_release: bool,
 }
 
 /// The state a fast approach can return to.
@@ -93,6 +99,8 @@ impl Case<'_> {
             reviewed: false,
             watch_from: first_sample,
             restarts: 0,
+            released: None,
+            slow_release: false,
         };
         self.enter(&mut travel, phase);
         let mut saved = Checkpoints::new(start);
@@ -109,7 +117,9 @@ impl Case<'_> {
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
             if self.is_bend() && way.0 > 0.0 {
                 let f_bar = self.report.series.last().map_or(0.0, |s| s.f_bar);
-                self.release_tails(f_bar);
+                if self.release_tails(f_bar) && travel.phase == Phase::Approach {
+                    travel.released = Some(self.l_k_arc_bar());
+                }
             }
             if self.report.bend_series.last().is_some_and(|b| b.apart) {
                 if self.slipped(&mut travel, &mut saved)? {
@@ -183,7 +193,8 @@ impl Case<'_> {
 
     /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
     /// own length `arc`: back to a checkpoint when the fast approach sees an
-    /// event (returns `true`), checkpoints while fast, fast again past the
+    /// event, lets a bend's or a hitch's tails go or, in an overhand knot,
+    /// sees a smeared snap of H bar (returns `true`), checkpoints while fast, fast again past the
     /// event or after a false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
@@ -193,7 +204,22 @@ impl Case<'_> {
         arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
-        if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 {
+        if let Some(at) = travel.released.take() {
+            // The fast approach let the tails go: the knot's response to the
+            // setting load let go (its holding force, or its slip) is met at
+            // `pull_speed`, as an event is.
+            if self.restart(
+                travel,
+                saved,
+                way.back(at, way.restart_before(None)),
+                Some(at),
+                Outcome::Restarted,
+            )? {
+                travel.slow_release = true;
+                return Ok(true);
+            }
+        }
+        if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
                 let back = way.back(began, way.restart_before(self.turns()));
                 if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
@@ -233,6 +259,13 @@ impl Case<'_> {
                 self.enter(travel, Phase::After);
             }
             (Phase::Snap | Phase::Fallback, None)
+                if travel.slow_release && self.released_behind(travel, arc) =>
+            {
+                self.end_phase(Outcome::Confirmed);
+                travel.slow_release = false;
+                self.enter(travel, Phase::After);
+            }
+            (Phase::Snap | Phase::Fallback, None)
                 if travel
                     .fast_event
                     .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
@@ -253,6 +286,15 @@ impl Case<'_> {
             _ => self.drive(travel, l_k_bar),
         }
         Ok(false)
+    }
+
+    /// Whether the stage let the tails go `SLOW_AFTER` or more before `arc`
+    /// (the knot's own length).
+    fn released_behind(&self, travel: &Travel, arc: f64) -> bool {
+        let freed = (self.report.bend_series.get(travel.first_sample..))
+            .and_then(|b| b.iter().position(|b| b.tails_free))
+            .map(|i| self.report.series[travel.first_sample + i].l_k_arc_bar);
+        freed.is_some_and(|at| travel.way.reached(arc, travel.way.on(at, SLOW_AFTER)))
     }
 
     /// Back to the latest checkpoint at or before `before` (the knot's own
@@ -387,26 +429,25 @@ impl Case<'_> {
     }
 
     /// Detects the current stage's first event in its own samples; returns
-    /// it when found at this sample.
+    /// it when found at this sample. The overhand knot's events are read on
+    /// its loop's height H bar ([`events::detect`]); every other knot's on
+    /// F bar ([`events::detect_snap`], tightening only: H bar, found from
+    /// the contacts around the middle node, jumps between a figure-eight's
+    /// or a braid closure's lobes, and a bend has none), from the tails'
+    /// release on when they were held ([`Case::snap_watch`]).
     fn detect(&mut self, travel: &mut Travel) -> Option<Event> {
         if travel.event.is_some() {
             return None;
         }
         let criteria = self.criteria();
-        let found = if self.is_bend() {
-            (travel.way.0 > 0.0)
-                .then(|| {
-                    events::detect_bend_snap(&self.report.series, travel.first_sample, &criteria, self.stage)
-                })
-                .flatten()
+        let first = travel.first_sample;
+        let found = if self.reads_loop() {
+            events::detect(&self.report.series, first, travel.way, &criteria, self.stage)
+        } else if travel.way.0 > 0.0 {
+            self.snap_watch(first)
+                .and_then(|from| events::detect_snap(&self.report.series, from, &criteria, self.stage))
         } else {
-            events::detect(
-                &self.report.series,
-                travel.first_sample,
-                travel.way,
-                &criteria,
-                self.stage,
-            )
+            None
         }
         .map(|e| Event {
             restarts: travel.restarts,
@@ -414,10 +455,30 @@ impl Case<'_> {
         });
         travel.event = found;
         if let Some(event) = found {
-            let reported = events::reported(&self.report.series, travel.first_sample, &criteria, event);
+            let reported = events::reported(&self.report.series, first, &criteria, event);
             self.record(reported);
         }
         found
+    }
+
+    /// Whether the knot's events are read on its loop's height H bar: the
+    /// overhand knot's (the builder's or a user's), paper Fig. 5.
+    fn reads_loop(&self) -> bool {
+        self.params.knot == KnotKind::Overhand
+    }
+
+    /// The first sample of the stage starting at `first` that the snap
+    /// detector watches: a bend's or a hitch's first with the tails free (F
+    /// bar's fall as the setting load is let go is no snap; `None` while
+    /// they are held), any other knot's first.
+    fn snap_watch(&self, first: usize) -> Option<usize> {
+        if !self.is_bend() {
+            return Some(first);
+        }
+        let freed = self.report.bend_series[first..]
+            .iter()
+            .position(|b| b.tails_free)?;
+        Some(first + freed)
     }
 
     /// Frees the clamps along the pull (the axis is x, checked at submit

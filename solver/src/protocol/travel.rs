@@ -194,8 +194,9 @@ impl Case<'_> {
     /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
     /// own length `arc`: back to a checkpoint when the fast approach sees an
     /// event, lets a bend's or a hitch's tails go or, in an overhand knot,
-    /// sees a smeared snap of H bar (returns `true`), checkpoints while fast, fast again past the
-    /// event or after a false alarm; otherwise the clamps' speed.
+    /// sees a smeared snap of H bar (returns `true`), checkpoints while
+    /// fast, fast again past the event (or the tails' release) or after a
+    /// false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
         travel: &mut Travel,

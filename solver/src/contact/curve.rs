@@ -57,6 +57,8 @@ pub struct Piece {
     /// For each control point, the nodes it is made of: `(slot, factor)`
     /// pairs (the second `factor` zero inside the rod).
     folds: [[(usize, f64); 2]; STENCIL],
+    /// The piece in powers of `u`: `x(u) = sum_j power_j u^j`.
+    power: [Vector3<f64>; 4],
 }
 
 /// A point of a piece: position, first and second derivatives in `u`.
@@ -73,7 +75,7 @@ struct Jet {
 /// central differences `m_i = (P_(i-2) - 8 P_(i-1) + 8 P_(i+1) - P_(i+2)) / 12`,
 /// given the Hermite basis `(h00, h10, h01, h11)` at `u` (or its derivatives).
 #[inline]
-fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
+const fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
     let c = SMOOTHING;
     let (a, b) = (h10 / 12.0, h11 / 12.0);
     let (p, q) = (0.5 * c * h00, 0.5 * c * h01);
@@ -87,25 +89,27 @@ fn combine([h00, h10, h01, h11]: [f64; 4]) -> [f64; STENCIL] {
     ]
 }
 
-/// Control-point weights at `u` and their first two derivatives.
+/// The control points' weights in powers of `u`: row `j` holds the
+/// coefficients of `u^j` in [`combine`] of the Hermite basis
+/// `h00 = 1 - 3u^2 + 2u^3`, `h10 = u - 2u^2 + u^3`, `h01 = 3u^2 - 2u^3`,
+/// `h11 = u^3 - u^2`.
+const POWERS: [[f64; STENCIL]; 4] = [
+    combine([1.0, 0.0, 0.0, 0.0]),
+    combine([0.0, 1.0, 0.0, 0.0]),
+    combine([-3.0, -2.0, 3.0, -1.0]),
+    combine([2.0, 1.0, -2.0, 1.0]),
+];
+
+/// Control-point weights at `u` (the Hermite basis in [`combine`]).
 #[inline]
-fn basis(u: f64) -> ([f64; STENCIL], [f64; STENCIL], [f64; STENCIL]) {
+fn basis(u: f64) -> [f64; STENCIL] {
     let (u2, u3) = (u * u, u * u * u);
-    (
-        combine([
-            2.0 * u3 - 3.0 * u2 + 1.0,
-            u3 - 2.0 * u2 + u,
-            -2.0 * u3 + 3.0 * u2,
-            u3 - u2,
-        ]),
-        combine([
-            6.0 * u2 - 6.0 * u,
-            3.0 * u2 - 4.0 * u + 1.0,
-            -6.0 * u2 + 6.0 * u,
-            3.0 * u2 - 2.0 * u,
-        ]),
-        combine([12.0 * u - 6.0, 6.0 * u - 4.0, -12.0 * u + 6.0, 6.0 * u - 2.0]),
-    )
+    combine([
+        2.0 * u3 - 3.0 * u2 + 1.0,
+        u3 - 2.0 * u2 + u,
+        -2.0 * u3 + 3.0 * u2,
+        u3 - u2,
+    ])
 }
 
 impl Piece {
@@ -116,44 +120,52 @@ impl Piece {
         let last = n as isize - 1;
         let clamp = |i: isize| i.clamp(0, last) as usize;
         let nodes = OFFSETS.map(|o| clamp(e as isize + o));
-        let slot = |i: usize| nodes.iter().position(|&k| k == i).unwrap_or(0);
-        let folds = OFFSETS.map(|o| {
-            let i = e as isize + o;
-            if i < 0 {
-                [(slot(0), 2.0), (slot(clamp(-i)), -1.0)]
-            } else if i > last {
-                [(slot(last as usize), 2.0), (slot(clamp(2 * last - i)), -1.0)]
-            } else {
-                [(slot(i as usize), 1.0), (0, 0.0)]
-            }
-        });
+        let interior = e >= 2 && e as isize + 3 <= last;
+        let folds = if interior {
+            std::array::from_fn(|k| [(k, 1.0), (0, 0.0)])
+        } else {
+            let slot = |i: usize| nodes.iter().position(|&k| k == i).unwrap_or(0);
+            OFFSETS.map(|o| {
+                let i = e as isize + o;
+                if i < 0 {
+                    [(slot(0), 2.0), (slot(clamp(-i)), -1.0)]
+                } else if i > last {
+                    [(slot(last as usize), 2.0), (slot(clamp(2 * last - i)), -1.0)]
+                } else {
+                    [(slot(i as usize), 1.0), (0, 0.0)]
+                }
+            })
+        };
         let control = std::array::from_fn(|k| {
+            if interior {
+                return node(nodes[k]);
+            }
             let [(a, fa), (b, fb)] = folds[k];
             let p = fa * node(nodes[a]);
             if fb == 0.0 { p } else { p + fb * node(nodes[b]) }
+        });
+        let power = POWERS.map(|w| {
+            let mut x = w[0] * control[0];
+            for k in 1..STENCIL {
+                x += w[k] * control[k];
+            }
+            x
         });
         Self {
             control,
             nodes,
             folds,
+            power,
         }
     }
 
     #[inline]
     fn jet(&self, u: f64) -> Jet {
-        let (b, db, ddb) = basis(u);
-        let c = &self.control;
-        let sum = |w: &[f64; STENCIL]| {
-            let mut x = w[0] * c[0];
-            for k in 1..STENCIL {
-                x += w[k] * c[k];
-            }
-            x
-        };
+        let [a0, a1, a2, a3] = &self.power;
         Jet {
-            x: sum(&b),
-            dx: sum(&db),
-            ddx: sum(&ddb),
+            x: ((a3 * u + a2) * u + a1) * u + a0,
+            dx: (a3 * (3.0 * u) + a2 * 2.0) * u + a1,
+            ddx: a3 * (6.0 * u) + a2 * 2.0,
         }
     }
 
@@ -171,7 +183,7 @@ impl Piece {
     /// `sum_k weights_k x_(nodes_k)`, and a force `F` there puts
     /// `weights_k F` on node `nodes_k`.
     pub fn weights(&self, u: f64) -> [f64; STENCIL] {
-        let (b, _, _) = basis(u);
+        let b = basis(u);
         let mut w = [0.0; STENCIL];
         for (k, fold) in self.folds.iter().enumerate() {
             for &(slot, factor) in fold {
@@ -227,7 +239,13 @@ const MAX_STEP: f64 = 0.25;
 /// chords.
 pub fn closest_points_on_pieces(a: &Piece, b: &Piece) -> CurvePair {
     let chord = closest_points(&a.control[0], &a.control[1], &b.control[0], &b.control[1]);
-    let (mut s, mut t) = (chord.s, chord.t);
+    closest_points_from(a, b, (chord.s, chord.t))
+}
+
+/// Closest points of pieces `a` and `b` from the parameters `start` (the
+/// closest points of their chords, where the caller has them).
+pub fn closest_points_from(a: &Piece, b: &Piece, start: (f64, f64)) -> CurvePair {
+    let (mut s, mut t) = start;
     let (mut ja, mut jb) = (a.jet(s), b.jet(t));
     for _ in 0..MAX_ITERATIONS {
         let d = ja.x - jb.x;
@@ -344,17 +362,18 @@ mod tests {
         }
     }
 
-    /// The derivatives of the basis against central differences.
+    /// The jet's derivatives against central differences of its points.
     #[test]
-    fn basis_derivatives() {
+    fn jet_derivatives() {
+        let mut rng = StdRng::seed_from_u64(2);
+        let x = random_points(&mut rng, 8);
         let h = 1e-6;
-        for u in [0.0, 0.2, 0.5, 0.77, 1.0] {
-            let (_, db, ddb) = basis(u);
-            let (bp, dbp, _) = basis(u + h);
-            let (bm, dbm, _) = basis(u - h);
-            for k in 0..STENCIL {
-                assert!((db[k] - (bp[k] - bm[k]) / (2.0 * h)).abs() < 1e-9);
-                assert!((ddb[k] - (dbp[k] - dbm[k]) / (2.0 * h)).abs() < 1e-8);
+        for e in [0, 3, 6] {
+            let p = Piece::new(x.len(), e, |i| x[i]);
+            for u in [0.0, 0.2, 0.5, 0.77, 1.0] {
+                let (j, jp, jm) = (p.jet(u), p.jet(u + h), p.jet(u - h));
+                assert!((j.dx - (jp.x - jm.x) / (2.0 * h)).norm() < 1e-8);
+                assert!((j.ddx - (jp.dx - jm.dx) / (2.0 * h)).norm() < 1e-7);
             }
         }
     }

@@ -298,7 +298,10 @@ impl GaussSeidel {
                     options.relaxation * row.inv_w_t,
                 );
                 let change = r - row.r;
-                row.push(&change, &mut self.dv, &mut self.dspin);
+                // A contact that stays apart (zero force) moves nothing.
+                if change != Vector3::zeros() {
+                    row.push(&change, &mut self.dv, &mut self.dspin);
+                }
                 row.r = r;
                 max_change2 = max_change2.max(change.norm_squared());
                 max_force2 = max_force2.max(r.norm_squared());

@@ -64,7 +64,7 @@ pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vect
 }
 
 /// Smooth contacts ([`super::curve`]) whose closest points nearly coincide:
-/// `keep[k]` says whether candidate `k` stays. Pairs are taken nearest
+/// [`Merge::keep`] says whether a candidate stays. Pairs are taken nearest
 /// first; one is dropped when a kept pair of an adjacent piece pair (the
 /// eight around it, on the same rods) has its contact points within
 /// `fraction` of this pair's segments' lengths on both curves. Nearly
@@ -73,62 +73,95 @@ pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vect
 /// almost the same place; such near-duplicates make the Delassus operator
 /// nearly singular and slow the solve. Points further apart than `fraction`
 /// of an edge all stay, so a line contact keeps a point every `fraction`
-/// edges or closer. `order` is a reusable buffer.
-pub(crate) fn merge_close_curves(
-    pairs: &[CandidatePair],
-    curves: &[CurvePair],
-    segments: &[Segment],
-    fraction: f64,
-    order: &mut Vec<usize>,
-    keep: &mut Vec<bool>,
-) {
-    order.clear();
-    order.extend(0..pairs.len());
-    order.sort_unstable_by(|&a, &b| curves[a].distance.total_cmp(&curves[b].distance).then(a.cmp(&b)));
-    keep.clear();
-    keep.resize(pairs.len(), false);
-    // Segment `i`'s neighbour `d` along its rod, if any.
-    let step = |i: usize, d: isize| {
-        let n = i.checked_add_signed(d)?;
-        (n < segments.len()
-            && segments[n].body == segments[i].body
-            && segments[n].index.abs_diff(segments[i].index) == d.unsigned_abs())
-        .then_some(n)
-    };
-    for &k in order.iter() {
-        let p = &pairs[k];
-        let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
-        let tol_a = fraction * (segments[p.i].b - segments[p.i].a).norm();
-        let tol_b = fraction * (segments[p.j].b - segments[p.j].a).norm();
-        let mut duplicate = false;
-        'around: for di in -1..=1 {
-            for dj in -1..=1 {
-                if (di, dj) == (0, 0) {
-                    continue;
-                }
-                let (Some(i), Some(j)) = (step(p.i, di), step(p.j, dj)) else {
-                    continue;
-                };
-                // Pairs are stored with i < j; a swapped key swaps the points.
-                let (key, swapped) = if i < j { ((i, j), false) } else { ((j, i), true) };
-                let Ok(m) = pairs.binary_search_by(|q| (q.i, q.j).cmp(&key)) else {
-                    continue; // no such candidate (not a failure)
-                };
-                if !keep[m] {
-                    continue;
-                }
-                let (ma, mb) = if swapped {
-                    (&curves[m].point_b, &curves[m].point_a)
-                } else {
-                    (&curves[m].point_a, &curves[m].point_b)
-                };
-                if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b {
-                    duplicate = true;
-                    break 'around;
+/// edges or closer. Only pairs closer than their radii plus `margin` can
+/// become contacts and take part (a farther pair, taken after every nearer
+/// one, can drop none of them). Buffers are reused.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Merge {
+    /// The taking part pairs, nearest first.
+    order: Vec<usize>,
+    /// `first[i]`: the first pair whose lower segment is `i` or more
+    /// (pairs are sorted by `(i, j)`).
+    first: Vec<usize>,
+    keep: Vec<bool>,
+}
+
+impl Merge {
+    /// Decides which of `pairs` (sorted by `(i, j)`, with `curves` their
+    /// closest points) stay.
+    pub(crate) fn run(
+        &mut self,
+        pairs: &[CandidatePair],
+        curves: &[CurvePair],
+        segments: &[Segment],
+        fraction: f64,
+        margin: f64,
+    ) {
+        let Self { order, first, keep } = self;
+        order.clear();
+        order.extend((0..pairs.len()).filter(|&k| {
+            let p = &pairs[k];
+            curves[k].distance < segments[p.i].radius + segments[p.j].radius + margin
+        }));
+        order.sort_unstable_by(|&a, &b| curves[a].distance.total_cmp(&curves[b].distance).then(a.cmp(&b)));
+        first.clear();
+        let mut k = 0;
+        for i in 0..=segments.len() {
+            while k < pairs.len() && pairs[k].i < i {
+                k += 1;
+            }
+            first.push(k);
+        }
+        keep.clear();
+        keep.resize(pairs.len(), false);
+        // Segment `i`'s neighbour `d` along its rod, if any.
+        let step = |i: usize, d: isize| {
+            let n = i.checked_add_signed(d)?;
+            (n < segments.len()
+                && segments[n].body == segments[i].body
+                && segments[n].index.abs_diff(segments[i].index) == d.unsigned_abs())
+            .then_some(n)
+        };
+        for &k in order.iter() {
+            let p = &pairs[k];
+            let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
+            let tol_a = fraction * (segments[p.i].b - segments[p.i].a).norm();
+            let tol_b = fraction * (segments[p.j].b - segments[p.j].a).norm();
+            let mut duplicate = false;
+            'around: for di in -1..=1 {
+                for dj in -1..=1 {
+                    if (di, dj) == (0, 0) {
+                        continue;
+                    }
+                    let (Some(i), Some(j)) = (step(p.i, di), step(p.j, dj)) else {
+                        continue;
+                    };
+                    // Pairs are stored with i < j; a swapped key swaps the points.
+                    let ((lo, hi), swapped) = if i < j { ((i, j), false) } else { ((j, i), true) };
+                    let Some(m) = (first[lo]..first[lo + 1]).find(|&m| pairs[m].j == hi) else {
+                        continue; // no such candidate (not a failure)
+                    };
+                    if !keep[m] {
+                        continue;
+                    }
+                    let (ma, mb) = if swapped {
+                        (&curves[m].point_b, &curves[m].point_a)
+                    } else {
+                        (&curves[m].point_a, &curves[m].point_b)
+                    };
+                    if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b {
+                        duplicate = true;
+                        break 'around;
+                    }
                 }
             }
+            keep[k] = !duplicate;
         }
-        keep[k] = !duplicate;
+    }
+
+    /// Whether pair `k` of the last [`Merge::run`] stays.
+    pub(crate) fn keep(&self, k: usize) -> bool {
+        self.keep[k]
     }
 }
 
@@ -171,8 +204,9 @@ mod tests {
         let a = line(Vector3::zeros(), Vector3::x() * edge, 21);
         let b = line(Vector3::new(0.37 * edge, 2.0 * r, 0.0), Vector3::x() * edge, 21);
         let (segments, pairs, curves) = candidates([&a, &b], r, 0.25 * r);
-        let (mut order, mut keep) = (Vec::new(), Vec::new());
-        merge_close_curves(&pairs, &curves, &segments, fraction, &mut order, &mut keep);
+        let mut merge = Merge::default();
+        merge.run(&pairs, &curves, &segments, fraction, 0.25 * r);
+        let keep: Vec<bool> = (0..pairs.len()).map(|k| merge.keep(k)).collect();
         let close = |k: usize, m: usize| {
             (curves[k].point_a - curves[m].point_a).norm() <= fraction * edge
                 && (curves[k].point_b - curves[m].point_b).norm() <= fraction * edge
@@ -216,8 +250,9 @@ mod tests {
         let b = line(Vector3::new(0.0, -4.0, 2.0 * r), Vector3::y(), 9);
         let (segments, pairs, curves) = candidates([&a, &b], r, 0.25 * r);
         assert_eq!(pairs.len(), 4);
-        let (mut order, mut keep) = (Vec::new(), Vec::new());
-        merge_close_curves(&pairs, &curves, &segments, 0.25, &mut order, &mut keep);
+        let mut merge = Merge::default();
+        merge.run(&pairs, &curves, &segments, 0.25, 0.25 * r);
+        let keep: Vec<bool> = (0..pairs.len()).map(|k| merge.keep(k)).collect();
         assert_eq!(keep.iter().filter(|&&k| k).count(), 1);
         let kept = keep.iter().position(|&k| k).unwrap();
         let nearest = curves.iter().map(|c| c.distance).fold(f64::INFINITY, f64::min);

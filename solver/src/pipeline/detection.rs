@@ -3,7 +3,7 @@
 //! penetrations the step's end leaves.
 use super::{Body, World, WorldError};
 use crate::contact::broad_phase::Segment;
-use crate::contact::curve::{CurvePair, Piece, closest_points_on_pieces};
+use crate::contact::curve::{CurvePair, Piece, closest_points_from, closest_points_on_pieces};
 use crate::contact::segment::{SegmentPair, closest_points};
 use crate::contact::{Candidates, ContactPoint, FrictionLaw, Geometry, narrow_phase};
 use crate::rod::Rod;
@@ -18,7 +18,7 @@ pub(super) const SKIN: f64 = 0.25;
 
 /// Smooth contacts whose contact points lie within this fraction of an edge
 /// of a nearer one's, on both curves, are merged into it
-/// ([`narrow_phase::merge_close_curves`]). Over n = 3's adaptive pull
+/// ([`narrow_phase::Merge`]). Over n = 3's adaptive pull
 /// (docs/FIDELITY.md) 0.25 took F bar's ripple from 3.8 % to 0.93 % in as
 /// many steps; 0.35 and 0.42 dropped constraints a line contact needs (the
 /// step shrank for penetration: 1.3 and 1.7 times the steps).
@@ -80,17 +80,11 @@ impl World {
                 if p.closest.distance >= beyond {
                     apart(&p.closest)
                 } else {
-                    closest_points_on_pieces(&self.pieces[p.i], &self.pieces[p.j])
+                    closest_points_from(&self.pieces[p.i], &self.pieces[p.j], (p.closest.s, p.closest.t))
                 }
             }));
-            narrow_phase::merge_close_curves(
-                pairs,
-                &self.curves,
-                &self.segments,
-                MERGE_FRACTION,
-                &mut self.merge_order,
-                &mut self.merge_keep,
-            );
+            self.merge
+                .run(pairs, &self.curves, &self.segments, MERGE_FRACTION, margin);
         }
         self.contacts.clear();
         self.pair_ids.clear();
@@ -111,7 +105,7 @@ impl World {
             let mu = self.contact.friction;
             // The contact and each rod's unit tangent at it.
             let found = if smooth {
-                if !self.merge_keep[k] {
+                if !self.merge.keep(k) {
                     continue;
                 }
                 let curve = &self.curves[k];
@@ -242,7 +236,7 @@ fn pieces(rods: &[Rod], sa: &Segment, sb: &Segment) -> (Piece, Piece) {
 
 /// A candidate pair whose pieces cannot touch: its chords' closest points
 /// at distance infinity, so that merging takes it last and no contact
-/// comes of it ([`narrow_phase::merge_close_curves`] lets only nearer pairs
+/// comes of it ([`narrow_phase::Merge`] lets only nearer pairs
 /// drop a pair).
 fn apart(chords: &SegmentPair) -> CurvePair {
     CurvePair {

@@ -26,6 +26,7 @@ pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
 use crate::contact::curve::{CurvePair, Piece};
 use crate::contact::gauss_seidel::GaussSeidel;
+use crate::contact::narrow_phase::Merge;
 use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve, Cylinder};
 use crate::counters::Counters;
 use crate::energies::Energies;
@@ -92,10 +93,8 @@ pub struct World {
     deviations: Vec<f64>,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
-    /// Which of `curves` stay after merging near-duplicates, and the merge's
-    /// sort buffer.
-    merge_keep: Vec<bool>,
-    merge_order: Vec<usize>,
+    /// Which of `curves` stay after merging near-duplicates.
+    merge: Merge,
     gaps: Vec<usize>,
     contacts: Vec<ContactPoint>,
     pair_ids: Vec<(usize, usize)>,
@@ -178,8 +177,7 @@ impl World {
             pieces: Vec::new(),
             deviations: Vec::new(),
             curves: Vec::new(),
-            merge_keep: Vec::new(),
-            merge_order: Vec::new(),
+            merge: Merge::default(),
             gaps,
             contacts: Vec::new(),
             pair_ids: Vec::new(),

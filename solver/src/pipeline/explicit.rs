@@ -66,11 +66,7 @@ impl World {
         };
         let sol = self
             .gauss_seidel
-            .solve_problem(&problem, &{
-                let mut o = self.contact.solver;
-                if let Ok(v) = std::env::var("KS_MAX_SWEEPS") { o.max_sweeps = v.parse().unwrap(); }
-                o
-            }, Some(&self.warm))?;
+            .solve_problem(&problem, &self.contact.solver, Some(&self.warm))?;
         report.contact_sweeps = sol.sweeps;
         report.contact_residual = sol.residual;
         report.active_contacts = self

@@ -493,7 +493,8 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "",
         doc: "Relative tolerance of each step's frictional contact solve (projected Gauss-Seidel): the forces are \
               accepted when a sweep changes none by more than this times the largest, or the natural-map residual \
-              is this small (at most 200 sweeps).",
+              is this small (at most 200 sweeps; 12 with the smooth contact geometry, whose solves stop at the \
+              cap: docs/FIDELITY.md, \"The smooth solve's cap\").",
         value: |p| Some(Value::Number(p.contact_tolerance)),
     },
     Parameter {

@@ -76,12 +76,28 @@ pub enum Geometry {
     Segment,
 }
 
+impl Geometry {
+    /// The contact solve's sweep cap ([`GaussSeidelOptions::max_sweeps`]).
+    /// The smooth rows' twelve-node stencils overlap along a line contact,
+    /// whose nearly singular modes keep Gauss-Seidel from reaching 1e-6 in
+    /// hundreds of sweeps. The warm start carries each solve on from the
+    /// last step's forces, and n = 3's inversion, ripple and penetration do
+    /// not move with the cap beyond what round-off alone moves them (12 to
+    /// 200 sweeps: docs/FIDELITY.md, "The smooth solve's cap").
+    pub fn max_sweeps(self) -> usize {
+        match self {
+            Geometry::Segment => 200,
+            Geometry::Smooth => 12,
+        }
+    }
+}
+
 display_as_word!(FrictionLaw, ContactSolve, Candidates, Geometry);
 
 /// Stopping rule, relaxation and gap treatment.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GaussSeidelOptions {
-    /// Sweep cap.
+    /// Sweep cap ([`Geometry::max_sweeps`] in a case).
     pub max_sweeps: usize,
     /// Over-relaxation factor `omega` in (0, 2) (projected SOR): contact `c`
     /// is updated by `r_c <- P(r_c - (omega / w_c) u_c)`, `P` the projection

@@ -149,6 +149,7 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         geometry: params.contact_geometry,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
+            max_sweeps: params.contact_geometry.max_sweeps(),
             ..defaults.solver
         },
         ..defaults

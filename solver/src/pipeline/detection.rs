@@ -88,6 +88,7 @@ impl World {
         }
         self.contacts.clear();
         self.pair_ids.clear();
+        self.starts.clear();
         for (k, p) in pairs.iter().enumerate() {
             // Smooth contacts keep every pair but near-duplicates: a pair's
             // closest points lie on a piece's end wherever the distance runs
@@ -104,6 +105,11 @@ impl World {
             let contact_distance = sa.radius + sb.radius;
             let mu = self.contact.friction;
             // The contact and each rod's unit tangent at it.
+            let start = if smooth {
+                (self.curves[k].s, self.curves[k].t)
+            } else {
+                (p.closest.s, p.closest.t)
+            };
             let found = if smooth {
                 if !self.merge.keep(k) {
                     continue;
@@ -150,6 +156,7 @@ impl World {
             }
             self.contacts.push(c);
             self.pair_ids.push((p.i, p.j));
+            self.starts.push(start);
         }
         self.detect_obstacle(margin);
         Ok(())
@@ -183,19 +190,29 @@ impl World {
             }
             self.contacts.push(c);
             self.pair_ids.push((OBSTACLE, k));
+            self.starts.push((0.0, 0.0));
         }
     }
 
     /// Largest penetration over the detected pairs at the current positions.
     pub(super) fn max_penetration(&self) -> f64 {
-        let pairs = self.pair_ids.iter().chain(&self.implicit.dropped);
-        pairs.fold(0.0, |worst: f64, &(i, j)| worst.max(self.penetration(i, j)))
+        let detected = self
+            .pair_ids
+            .iter()
+            .zip(&self.starts)
+            .map(|(&id, &st)| (id, Some(st)));
+        let dropped = self.implicit.dropped.iter().map(|&id| (id, None));
+        detected.chain(dropped).fold(0.0, |worst: f64, ((i, j), start)| {
+            worst.max(self.penetration(i, j, start))
+        })
     }
 
     /// How far segments `i` and `j` overlap at the current positions:
     /// `r_a + r_b` minus their distance (negative when apart).
     /// `i` is [`OBSTACLE`] for segment `j`'s contact with the obstacle.
-    pub(super) fn penetration(&self, i: usize, j: usize) -> f64 {
+    /// The smooth centre lines' closest points are sought from `start`
+    /// (the pair's parameters at detection), or from the chords'.
+    pub(super) fn penetration(&self, i: usize, j: usize, start: Option<(f64, f64)>) -> f64 {
         if i == OBSTACLE {
             let s = &self.segments[j];
             let rod = &self.rods[s.body];
@@ -207,7 +224,10 @@ impl World {
         let distance = match self.contact.geometry {
             Geometry::Smooth => {
                 let (a, b) = pieces(&self.rods, sa, sb);
-                closest_points_on_pieces(&a, &b).distance
+                match start {
+                    Some(start) => closest_points_from(&a, &b, start).distance,
+                    None => closest_points_on_pieces(&a, &b).distance,
+                }
             }
             Geometry::Segment => {
                 let (ra, rb) = (&self.rods[sa.body], &self.rods[sb.body]);

@@ -181,9 +181,10 @@ impl World {
         let mut kept = 0;
         for k in 0..self.contacts.len() {
             let (i, j) = self.pair_ids[k];
-            if self.penetration(i, j) > 0.0 {
+            if self.penetration(i, j, Some(self.starts[k])) > 0.0 {
                 self.contacts[kept] = self.contacts[k];
                 self.pair_ids[kept] = self.pair_ids[k];
+                self.starts[kept] = self.starts[k];
                 kept += 1;
             } else {
                 self.implicit.dropped.push((i, j));
@@ -191,6 +192,7 @@ impl World {
         }
         self.contacts.truncate(kept);
         self.pair_ids.truncate(kept);
+        self.starts.truncate(kept);
     }
 
     /// Step 3 of [`World::step`] for [`ContactSolve::Implicit`], after

@@ -98,6 +98,9 @@ pub struct World {
     gaps: Vec<usize>,
     contacts: Vec<ContactPoint>,
     pair_ids: Vec<(usize, usize)>,
+    /// Each contact's closest-point parameters at detection (on its pieces
+    /// or segments), where the step-end penetration's search starts.
+    starts: Vec<(f64, f64)>,
     history: ForceHistory,
     warm: Vec<Vector3<f64>>,
     inv_mass: Vec<f64>,
@@ -181,6 +184,7 @@ impl World {
             gaps,
             contacts: Vec::new(),
             pair_ids: Vec::new(),
+            starts: Vec::new(),
             history: ForceHistory::default(),
             warm: Vec::new(),
             inv_mass: vec![0.0; total],

@@ -22,8 +22,9 @@
 //! A stage goes back at most `MAX_RESTARTS` times. The snap phase ends when
 //! its event is confirmed (seen at `pull_speed`), refuted (`FALSE_ALARM` past
 //! the fast pull's event without one: fast again, the fall it saw no longer
-//! watched) or found too soon after the restart (going back further); its
-//! span in the report says which ([`Outcome`]). The last restart runs the
+//! watched), found too soon after the restart or, in an overhand knot,
+//! preceded by a jump of the knot without an event (going back further in
+//! both); its span in the report says which ([`Outcome`]). The last restart runs the
 //! reference pull through the stretch ([`Phase::Fallback`]): to the event
 //! and `SLOW_AFTER` past it, or, refuted, to the stage's end.
 //!
@@ -225,6 +226,10 @@ pub enum Outcome {
     /// Its event came within `MIN_LEAD` of the restart, which was past the
     /// fold: the stage goes back further.
     TooLate,
+    /// A tightening overhand knot jumped without an event
+    /// ([`crate::measurements::knot_jumped`]): the slow phase started past
+    /// the fold or its snap went unseen, and the stage goes back further.
+    Jumped,
 }
 
 display_as_word!(Outcome);

@@ -889,7 +889,7 @@ mod tests {
     }
 
     /// n = 2 at L/h 5000 (rubber, mu 0.05): H bar falls in one sample to
-    /// 0.6045 of its largest (0.318 within the window), the knot's own
+    /// 0.6045 of its largest (0.32 within the window), the knot's own
     /// length by 6.6 radii while the clamps travel 0.5, and F bar from 0.041
     /// to 0.031 in the next sample, with little kinetic energy. The jump
     /// makes it a snap, found once F bar has fallen; without the jump, with
@@ -901,11 +901,11 @@ mod tests {
         let mut s: Vec<Sample> = (0..30)
             .map(|k| Sample {
                 l_k_arc_bar: 88.0 - 0.5 * k as f64,
-                ..sample(37.5 - 0.5 * k as f64, 0.318, 1e-6, 0.04)
+                ..sample(37.5 - 0.5 * k as f64, 0.32, 1e-6, 0.04)
             })
             .collect();
         let (l, arc) = (s[29].l_k_bar - 0.5, s[29].l_k_arc_bar - 6.6);
-        let (h_low, f_low) = (0.6045 * 0.318, 0.031);
+        let (h_low, f_low) = (0.6045 * 0.32, 0.031);
         let after = |k: f64, h: f64, f: f64| Sample {
             l_k_arc_bar: arc - 0.1 * k,
             ..sample(l - 0.5 * k, h, 2e-6, f)
@@ -926,7 +926,7 @@ mod tests {
         assert_eq!(detect_inversion(&smooth, &criteria), None, "no jump");
         let mut higher = s.clone();
         for x in &mut higher[30..] {
-            x.h_bar = 0.8 * 0.318;
+            x.h_bar = 0.8 * 0.32;
         }
         assert_eq!(detect_inversion(&higher, &criteria), None, "H bar at 0.8");
         let mut held = s.clone();

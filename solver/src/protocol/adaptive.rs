@@ -112,6 +112,13 @@ const SMEARED_FALL: f64 = 0.4;
 const SMEARED_START: f64 = 0.9;
 const SMEARED_WINDOW: f64 = 20.0;
 const SMEARED_SPAN: f64 = 5.0;
+/// A slow phase's knot jump without an event ([`Outcome::Jumped`]): its own
+/// length falls within a sample by more than this many times the clamps'
+/// travel. Without H bar's fall to confirm it, the jump must exceed the slips
+/// of a knot coming to its snap (up to 8.6 times under the reference pulls of
+/// n = 2 at L/h 5000) and stay below the snaps there (11.2 to 32.7 times;
+/// docs/FIDELITY.md, "The knot's jump").
+pub(super) const JUMP_WITHOUT_EVENT: f64 = 10.0;
 /// Checkpoints kept (they span several retries of `RESTART_BEFORE`).
 pub(super) const CHECKPOINTS: usize = 24;
 /// Restarts from a checkpoint a stage may take: the last one falls back to

@@ -7,15 +7,15 @@
 //! samples; the adaptive schedule ([`super::adaptive`]) runs pulls and
 //! releases fast far from them.
 use super::adaptive::{
-    self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
-    SLOW_AFTER, Way,
+    self, Checkpoints, END_REVIEW, FALSE_ALARM, JUMP_WITHOUT_EVENT, MAX_RESTARTS, MIN_LEAD, Outcome, Phase,
+    SETTLE_TIME, SLOW_AFTER, Way,
 };
 use super::events;
 use super::report::{Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer};
 use super::snapshots::SnapshotPlan;
 use crate::case::{Direction, KnotKind, LoadStage};
-use crate::measurements::{self, Sample};
+use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::World;
 use crate::rod::{End, Spring, node_dof};
 use crate::time_step::TimeStep;
@@ -307,7 +307,8 @@ impl Case<'_> {
         Ok(false)
     }
 
-    /// Whether the knot jumped ([`measurements::knot_jumped`]) into the
+    /// Whether the knot jumped ([`measurements::knot_jumped`], by more than
+    /// [`JUMP_WITHOUT_EVENT`] times the clamps' travel) into the
     /// sample of the current phase taken [`measurements::CONFIRM_SAMPLES`]
     /// before the last (the event detector has read the samples that confirm
     /// a snap there), from the sample before it in the same phase or, the
@@ -331,7 +332,11 @@ impl Case<'_> {
                 ..Sample::default()
             },
         };
-        measurements::knot_jumped(&before, &series[k], &self.criteria())
+        let criteria = InversionCriteria {
+            knot_jump: JUMP_WITHOUT_EVENT,
+            ..self.criteria()
+        };
+        measurements::knot_jumped(&before, &series[k], &criteria)
     }
 
     /// Whether the stage let the tails go `SLOW_AFTER` or more before `arc`

@@ -361,7 +361,9 @@ def run(
           the constant dt of the paper's scheme. Range: true or false. Default: true. Paper: false.
       contact_tolerance: Relative tolerance of each step's frictional contact solve (projected Gauss-Seidel):
           the forces are accepted when a sweep changes none by more than this times the largest, or the
-          natural-map residual is this small (at most 200 sweeps). Range: [1e-12, 1e-3]. Default: 1e-6.
+          natural-map residual is this small (at most 200 sweeps; 12 with the smooth contact geometry, whose
+          solves stop at the cap: docs/FIDELITY.md, "The smooth solve's cap"). Range: [1e-12, 1e-3]. Default:
+          1e-6.
       relax_time (s): Longest relaxation with the ends held before pulling. Range: null or [0, 100] s. null: 2
           s in the case's time unit: the paper's rod's 2 s, scaled as its knot's dynamics (report's
           time_unit). Default: null.

@@ -75,7 +75,7 @@ class Stage(Record):
     steps: int
     newton_iterations: int
     contact_sweeps: int
-    outcome: Literal["restarted", "confirmed", "refuted", "too_late", "jumped"] | None
+    outcome: Literal["restarted", "confirmed", "refuted", "too_late"] | None
 
 class Event(Record):
     """A snap of the loop in one stage of the loading program."""

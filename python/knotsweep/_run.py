@@ -48,8 +48,8 @@ class Stage(Record):
     ``phase``, ``stage`` (the loading program's stage index, None for the
     relaxation), ``from_l_k_bar``, ``to_l_k_bar``, ``steps``,
     ``newton_iterations``, ``contact_sweeps``, ``outcome`` (how the adaptive
-    schedule ended it: ``restarted``, ``confirmed``, ``refuted``, ``too_late``,
-    ``jumped``; None: it ran its course)."""
+    schedule ended it: ``restarted``, ``confirmed``, ``refuted``, ``too_late``;
+    None: it ran its course)."""
 
 
 class Event(Record):

@@ -370,22 +370,6 @@ pub struct InversionCriteria {
     /// value before the drop (the "rapid decrease" of F bar at the
     /// inversion, paper Fig. 5 a).
     pub force_drop: f64,
-    /// A knot jump ([`knot_jumped`]): the knot's own length falls within a
-    /// sample by more than this many times the clamps' travel in it. A
-    /// tightening knot's own length falls by less than the clamps' travel
-    /// (its tails stretch as the force rises) and by up to about 4 times it
-    /// in the stick-slip of a knot pulled through (the force falling a
-    /// little: the tails, springs in series with the knot, give back their
-    /// stretch); the snaps of n = 2 at L/h 5000 fall by 13 and 27 times it
-    /// (docs/FIDELITY.md, "The knot's jump").
-    pub knot_jump: f64,
-    /// Reading H bar, a drop with a knot jump and F bar falling through it
-    /// is a snap when H bar falls to at most this fraction of its largest
-    /// value within `window` (the jump confirms what a larger fall alone
-    /// must): n = 2's loop stays open after its snap, falling to 0.58-0.63
-    /// of that largest value, at `drop_fraction`'s threshold, where steady
-    /// tightening lowers it by about a tenth.
-    pub jump_drop_fraction: f64,
 }
 
 impl Default for InversionCriteria {
@@ -395,8 +379,6 @@ impl Default for InversionCriteria {
             window: 10.0,
             kinetic_energy_spike: 5.0,
             force_drop: 0.8,
-            knot_jump: 6.0,
-            jump_drop_fraction: 0.75,
         }
     }
 }
@@ -428,21 +410,6 @@ impl Reading {
     }
 }
 
-/// Samples after a drop that confirm it (its kinetic energy and F bar are
-/// read up to this many samples on).
-pub const CONFIRM_SAMPLES: usize = 3;
-
-/// Whether the knot jumped from sample `before` to `after` of a tightening:
-/// its own length fell by more than `knot_jump` times the clamps' travel
-/// (the fall of l_k bar), so that the knot gave way and its tails recoiled
-/// into it. On a rod longer than its knot the tails are a soft spring in
-/// series with it, and a snap-through shows as a jump of the knot's own
-/// length by the tails' recoil, (tails / 4) times the fall of F bar radii.
-pub fn knot_jumped(before: &Sample, after: &Sample, criteria: &InversionCriteria) -> bool {
-    let travel = before.l_k_bar - after.l_k_bar;
-    travel > 0.0 && before.l_k_arc_bar - after.l_k_arc_bar > criteria.knot_jump * travel
-}
-
 /// The first sudden drop of H bar that the kinetic energy confirms, and the
 /// force drop around it (paper Fig. 5): [`detect_fall`] read on H bar.
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
@@ -458,10 +425,7 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
 /// began by `kinetic_energy_spike`, or, reading H bar, when F bar falls
 /// within those samples to `force_drop` times its value before the drop
 /// (Fig. 5 a: F bar "rapidly decreases" at the inversion; a slow snap of
-/// rolling strands may stir little kinetic energy). Reading H bar, a smaller
-/// fall, to `jump_drop_fraction` of that largest value, is a snap too when
-/// the knot jumped into sample j ([`knot_jumped`]) and F bar falls through
-/// it: the jump is the snap-through's own confirmation.
+/// rolling strands may stir little kinetic energy).
 pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Reading) -> Option<Inversion> {
     for j in 1..series.len() {
         let drop = &series[j];
@@ -480,14 +444,10 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
         else {
             continue;
         };
-        let before = &series[j - 1];
-        let sudden = reading.level(drop) <= criteria.drop_fraction * reference;
-        let jumped = reading == Reading::LoopHeight
-            && reading.level(drop) <= criteria.jump_drop_fraction * reference
-            && knot_jumped(before, drop, criteria);
-        if reference <= 0.0 || !(sudden || jumped) {
+        if reference <= 0.0 || reading.level(drop) > criteria.drop_fraction * reference {
             continue;
         }
+        let before = &series[j - 1];
         let lo = start.saturating_sub(20);
         let mut ke: Vec<f64> = series[lo..start.max(lo + 1)]
             .iter()
@@ -495,7 +455,7 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
             .collect();
         ke.sort_by(f64::total_cmp);
         let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
-        let hi = (j + 1 + CONFIRM_SAMPLES).min(series.len());
+        let hi = (j + 4).min(series.len());
         let peak = series[start..hi]
             .iter()
             .map(|s| s.kinetic_energy)
@@ -508,9 +468,7 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
         let force_dropped = reading == Reading::LoopHeight
             && before.f_bar > 0.0
             && f_after <= criteria.force_drop * before.f_bar;
-        let confirmed = (sudden && (ratio >= criteria.kinetic_energy_spike || force_dropped))
-            || (jumped && f_after < before.f_bar);
-        if !confirmed {
+        if ratio < criteria.kinetic_energy_spike && !force_dropped {
             continue;
         }
         let (h_bar_before, h_bar_after) = match reading {
@@ -566,7 +524,7 @@ pub fn snap_onset(series: &[Sample], at: Inversion, criteria: &InversionCriteria
         return at;
     }
     let before = &series[onset];
-    let hi = (j + 1 + CONFIRM_SAMPLES).min(series.len());
+    let hi = (j + 4).min(series.len());
     Inversion {
         l_k_bar: before.l_k_bar,
         l_k_arc_bar: before.l_k_arc_bar,
@@ -618,7 +576,7 @@ pub fn detect_flip_back(series: &[Sample], criteria: &InversionCriteria) -> Opti
             .collect();
         ke.sort_by(f64::total_cmp);
         let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
-        let hi = (j + 1 + CONFIRM_SAMPLES).min(series.len());
+        let hi = (j + 4).min(series.len());
         let peak = series[start..hi]
             .iter()
             .map(|s| s.kinetic_energy)
@@ -886,79 +844,6 @@ mod tests {
         let found = detect_inversion(&earlier, &criteria).expect("detected");
         assert_eq!(found.sample, 39);
         assert_eq!(snap_onset(&earlier, found, &criteria), found);
-    }
-
-    /// n = 2 at L/h 5000 (rubber, mu 0.05): H bar falls in one sample to
-    /// 0.6045 of its largest (0.32 within the window), the knot's own
-    /// length by 6.6 radii while the clamps travel 0.5, and F bar from 0.041
-    /// to 0.031 in the next sample, with little kinetic energy. The jump
-    /// makes it a snap, found once F bar has fallen; without the jump, with
-    /// H bar falling less than to `jump_drop_fraction` or without F bar
-    /// falling, it is none.
-    #[test]
-    fn a_knot_jump_confirms_a_smaller_fall_of_h_bar() {
-        let criteria = InversionCriteria::default();
-        let mut s: Vec<Sample> = (0..30)
-            .map(|k| Sample {
-                l_k_arc_bar: 88.0 - 0.5 * k as f64,
-                ..sample(37.5 - 0.5 * k as f64, 0.32, 1e-6, 0.04)
-            })
-            .collect();
-        let (l, arc) = (s[29].l_k_bar - 0.5, s[29].l_k_arc_bar - 6.6);
-        let (h_low, f_low) = (0.6045 * 0.32, 0.031);
-        let after = |k: f64, h: f64, f: f64| Sample {
-            l_k_arc_bar: arc - 0.1 * k,
-            ..sample(l - 0.5 * k, h, 2e-6, f)
-        };
-        s.push(after(0.0, h_low, 0.041));
-        assert_eq!(detect_inversion(&s, &criteria), None, "F bar not fallen yet");
-        s.extend([after(1.0, h_low, f_low), after(2.0, h_low, 0.033)]);
-        let found = detect_inversion(&s, &criteria).expect("a snap");
-        assert_eq!((found.sample, found.l_k_arc_bar), (29, s[29].l_k_arc_bar));
-        assert_eq!((found.f_bar_before, found.f_bar_after), (0.04, f_low));
-        assert!(found.kinetic_energy_ratio < criteria.kinetic_energy_spike);
-        assert!(knot_jumped(&s[29], &s[30], &criteria));
-        assert!(!knot_jumped(&s[30], &s[31], &criteria));
-        let mut smooth = s.clone();
-        for (k, x) in smooth[30..].iter_mut().enumerate() {
-            x.l_k_arc_bar = s[29].l_k_arc_bar - 0.5 * (k + 1) as f64;
-        }
-        assert_eq!(detect_inversion(&smooth, &criteria), None, "no jump");
-        let mut higher = s.clone();
-        for x in &mut higher[30..] {
-            x.h_bar = 0.8 * 0.32;
-        }
-        assert_eq!(detect_inversion(&higher, &criteria), None, "H bar at 0.8");
-        let mut held = s.clone();
-        for x in &mut held[30..] {
-            x.f_bar = 0.045;
-        }
-        assert_eq!(detect_inversion(&held, &criteria), None, "F bar rising");
-    }
-
-    /// A knot jump is the own length falling by more than `knot_jump` times
-    /// the clamps' travel (l_k bar's fall) between two samples; a loosening
-    /// (l_k bar rising) never jumps.
-    #[test]
-    fn a_knot_jump_outruns_the_clamps() {
-        let criteria = InversionCriteria::default();
-        let at = |l_k_bar: f64, l_k_arc_bar: f64| Sample {
-            l_k_bar,
-            l_k_arc_bar,
-            ..Sample::default()
-        };
-        let limit = criteria.knot_jump * 0.5;
-        assert!(knot_jumped(
-            &at(30.0, 80.0),
-            &at(29.5, 80.0 - limit - 0.01),
-            &criteria
-        ));
-        assert!(!knot_jumped(
-            &at(30.0, 80.0),
-            &at(29.5, 80.0 - limit + 0.01),
-            &criteria
-        ));
-        assert!(!knot_jumped(&at(30.0, 80.0), &at(30.5, 70.0), &criteria));
     }
 
     #[test]

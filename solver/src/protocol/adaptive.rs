@@ -22,9 +22,8 @@
 //! A stage goes back at most `MAX_RESTARTS` times. The snap phase ends when
 //! its event is confirmed (seen at `pull_speed`), refuted (`FALSE_ALARM` past
 //! the fast pull's event without one: fast again, the fall it saw no longer
-//! watched), found too soon after the restart or, in an overhand knot,
-//! preceded by a jump of the knot without an event (going back further in
-//! both); its span in the report says which ([`Outcome`]). The last restart runs the
+//! watched) or found too soon after the restart (going back further); its
+//! span in the report says which ([`Outcome`]). The last restart runs the
 //! reference pull through the stretch ([`Phase::Fallback`]): to the event
 //! and `SLOW_AFTER` past it, or, refuted, to the stage's end.
 //!
@@ -112,13 +111,6 @@ const SMEARED_FALL: f64 = 0.4;
 const SMEARED_START: f64 = 0.9;
 const SMEARED_WINDOW: f64 = 20.0;
 const SMEARED_SPAN: f64 = 5.0;
-/// A slow phase's knot jump without an event ([`Outcome::Jumped`]): its own
-/// length falls within a sample by more than this many times the clamps'
-/// travel. Without H bar's fall to confirm it, the jump must exceed the slips
-/// of a knot coming to its snap (up to 8.6 times under the reference pulls of
-/// n = 2 at L/h 5000) and stay below the snaps there (11.2 to 32.7 times;
-/// docs/FIDELITY.md, "The knot's jump").
-pub(super) const JUMP_WITHOUT_EVENT: f64 = 10.0;
 /// Checkpoints kept (they span several retries of `RESTART_BEFORE`).
 pub(super) const CHECKPOINTS: usize = 24;
 /// Restarts from a checkpoint a stage may take: the last one falls back to
@@ -233,10 +225,6 @@ pub enum Outcome {
     /// Its event came within `MIN_LEAD` of the restart, which was past the
     /// fold: the stage goes back further.
     TooLate,
-    /// A tightening overhand knot jumped without an event
-    /// ([`crate::measurements::knot_jumped`]): the slow phase started past
-    /// the fold or its snap went unseen, and the stage goes back further.
-    Jumped,
 }
 
 display_as_word!(Outcome);

@@ -7,15 +7,14 @@
 //! samples; the adaptive schedule ([`super::adaptive`]) runs pulls and
 //! releases fast far from them.
 use super::adaptive::{
-    self, Checkpoints, END_REVIEW, FALSE_ALARM, JUMP_WITHOUT_EVENT, MAX_RESTARTS, MIN_LEAD, Outcome, Phase,
-    SETTLE_TIME, SLOW_AFTER, Way,
+    self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
+    SLOW_AFTER, Way,
 };
 use super::events;
 use super::report::{Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer};
 use super::snapshots::SnapshotPlan;
 use crate::case::{Direction, KnotKind, LoadStage};
-use crate::measurements::{self, InversionCriteria, Sample};
 use crate::pipeline::World;
 use crate::rod::{End, Spring, node_dof};
 use crate::time_step::TimeStep;
@@ -33,10 +32,6 @@ pub(super) struct Travel {
     /// knot's own length there.
     phase_start: f64,
     phase_start_arc: f64,
-    /// The knot's own length at the checkpoint the stage last went back to,
-    /// before it settled there (a knot restored past its fold may snap while
-    /// settling).
-    restarted_at: f64,
     /// Where (the knot's own length) the fast approach saw the event that
     /// the slow phase is resolving.
     fast_event: Option<f64>,
@@ -99,7 +94,6 @@ impl Case<'_> {
             phase,
             phase_start: start,
             phase_start_arc: start_arc,
-            restarted_at: start_arc,
             fast_event: None,
             event: None,
             reviewed: false,
@@ -252,22 +246,10 @@ impl Case<'_> {
                 // The slow phase met its event right after its restart: the
                 // restart was already past the fold. Go back further.
                 let (back, fast) = (
-                    way.back(travel.restarted_at, way.restart_before(self.turns())),
+                    way.back(travel.phase_start_arc, way.restart_before(self.turns())),
                     travel.fast_event,
                 );
                 if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
-                    return Ok(true);
-                }
-            }
-            (Phase::Snap, None) if way.0 > 0.0 && self.reads_loop() && self.jumped(travel) => {
-                // The knot gave way without an event: the slow phase started
-                // past the fold (the knot let go of the state the fast pull
-                // left it in) or missed the snap. Go back further.
-                let (back, fast) = (
-                    way.back(travel.restarted_at, way.restart_before(self.turns())),
-                    travel.fast_event,
-                );
-                if self.restart(travel, saved, back, fast, Outcome::Jumped)? {
                     return Ok(true);
                 }
             }
@@ -305,38 +287,6 @@ impl Case<'_> {
             _ => self.drive(travel, l_k_bar),
         }
         Ok(false)
-    }
-
-    /// Whether the knot jumped ([`measurements::knot_jumped`], by more than
-    /// [`JUMP_WITHOUT_EVENT`] times the clamps' travel) into the
-    /// sample of the current phase taken [`measurements::CONFIRM_SAMPLES`]
-    /// before the last (the event detector has read the samples that confirm
-    /// a snap there), from the sample before it in the same phase or, the
-    /// phase's first, from where the phase began: the settling before a slow
-    /// phase lets the fast pull's tension go, which is no jump.
-    fn jumped(&self, travel: &Travel) -> bool {
-        let series = &self.report.series;
-        let in_phase =
-            |i: usize| i >= travel.first_sample && self.sample_phases.get(i) == Some(&travel.phase);
-        let Some(k) = series.len().checked_sub(1 + measurements::CONFIRM_SAMPLES) else {
-            return false;
-        };
-        if !in_phase(k) {
-            return false;
-        }
-        let before = match k.checked_sub(1) {
-            Some(i) if in_phase(i) => series[i],
-            _ => Sample {
-                l_k_bar: travel.phase_start,
-                l_k_arc_bar: travel.phase_start_arc,
-                ..Sample::default()
-            },
-        };
-        let criteria = InversionCriteria {
-            knot_jump: JUMP_WITHOUT_EVENT,
-            ..self.criteria()
-        };
-        measurements::knot_jumped(&before, &series[k], &criteria)
     }
 
     /// Whether the stage let the tails go `SLOW_AFTER` or more before `arc`
@@ -462,7 +412,6 @@ impl Case<'_> {
         self.carried = c.carried;
         *travel = c.travel;
         travel.restarts = restarts;
-        travel.restarted_at = self.l_k_arc_bar();
         self.report.stats.restarts += 1;
         self.report.series.truncate(c.series);
         self.report.bend_series.truncate(c.series);

@@ -52,6 +52,35 @@ fn capstan_tension_ratio_is_exp_mu_phi() {
     assert_case("capstan");
 }
 
+/// The capstan with the smooth contact geometry: exp(mu phi) to the
+/// validation's tolerance (2 % of mu phi) under the explicit solve. Open
+/// (issue 40, docs/FIDELITY.md "The smooth geometry on the capstan"): the
+/// ratio reaches 1.08 of 1.37 and 1.42 of 6.59, with the rope half its radius
+/// inside the drum; the implicit solve meets it.
+#[test]
+#[ignore = "open (issue 40): the smooth geometry's explicit solve loses the capstan's friction"]
+fn smooth_capstan_tension_ratio_is_exp_mu_phi() {
+    use solver::contact::{ContactSolve, FrictionLaw, Geometry};
+    use solver::validation::contact::{Drum, capstan_on};
+    for (mu, turns) in [(0.1, 0.5), (0.3, 1.0)] {
+        let phi = turns * std::f64::consts::TAU;
+        let (ratio, expected) = capstan_on(
+            Drum::FixedRod,
+            mu,
+            phi,
+            FrictionLaw::Isotropic,
+            ContactSolve::Explicit,
+            Geometry::Smooth,
+        )
+        .unwrap();
+        println!("smooth capstan mu {mu}, {turns} turns: ratio {ratio:.3}, exp(mu phi) {expected:.3}");
+        assert!(
+            (ratio / expected - 1.0).abs() <= 0.02 * mu * phi,
+            "ratio {ratio} vs {expected}"
+        );
+    }
+}
+
 /// The same capstan on the rigid cylinder obstacle (a hitch's pole).
 #[test]
 fn capstan_on_the_rigid_cylinder_is_exp_mu_phi() {

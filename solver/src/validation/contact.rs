@@ -240,7 +240,7 @@ fn quadratic_coefficient(samples: &[(f64, f64)]) -> f64 {
 /// with R the wrap radius. Returns (mean pulling force / T during sliding,
 /// exp(mu phi)) under friction law `law`.
 pub fn capstan(mu: f64, phi: f64, law: FrictionLaw, solve: ContactSolve) -> Result<(f64, f64), WorldError> {
-    capstan_on(Drum::FixedRod, mu, phi, law, solve)
+    capstan_on(Drum::FixedRod, mu, phi, law, solve, Geometry::default())
 }
 
 /// What the capstan's rope is wrapped on.
@@ -259,6 +259,7 @@ pub fn capstan_on(
     phi: f64,
     law: FrictionLaw,
     solve: ContactSolve,
+    geometry: Geometry,
 ) -> Result<(f64, f64), WorldError> {
     let (r_fixed, r_rod) = (0.02, 0.3e-3);
     let radius = r_fixed + r_rod + 0.02 * r_rod;
@@ -305,6 +306,7 @@ pub fn capstan_on(
         friction: mu,
         friction_law: law,
         solve,
+        geometry,
         ..ContactOptions::default()
     };
     let mut world = match drum {

@@ -366,7 +366,8 @@ fn capstan_row(
     phi: f64,
     solve: crate::contact::ContactSolve,
 ) -> CaseResult {
-    match contact::capstan_on(drum, mu, phi, crate::contact::FrictionLaw::Isotropic, solve) {
+    let law = crate::contact::FrictionLaw::Isotropic;
+    match contact::capstan_on(drum, mu, phi, law, solve, crate::contact::Geometry::default()) {
         Ok((ratio, expected)) => CaseResult::relative(
             name,
             "tension ratio at slip exp(mu phi)",

@@ -53,12 +53,10 @@ fn capstan_tension_ratio_is_exp_mu_phi() {
 }
 
 /// The capstan with the smooth contact geometry: exp(mu phi) to the
-/// validation's tolerance (2 % of mu phi) under the explicit solve. Open
-/// (issue 40, docs/FIDELITY.md "The smooth geometry on the capstan"): the
-/// ratio reaches 1.08 of 1.37 and 1.42 of 6.59, with the rope half its radius
-/// inside the drum; the implicit solve meets it.
+/// validation's tolerance (2 % of mu phi) under the explicit solve, the
+/// rope's contact points held where their flat valleys start
+/// (docs/FIDELITY.md, "The smooth geometry on the capstan").
 #[test]
-#[ignore = "open (issue 40): the smooth geometry's explicit solve loses the capstan's friction"]
 fn smooth_capstan_tension_ratio_is_exp_mu_phi() {
     use solver::contact::{ContactSolve, FrictionLaw, Geometry};
     use solver::validation::contact::{Drum, capstan_on};

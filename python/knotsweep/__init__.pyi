@@ -338,9 +338,9 @@ def run(
           of one edge's period in force curves) or "smooth" (C1 cubic curves through the nodes smoothed by an
           eighth towards their neighbours, half the chords' sag inside the nodes' circle: gap, normal and the
           forces' weights on the nodes vary smoothly as one rod slides along another; a rope pulled over a rod
-          wavers by 0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.92 % of
-          F bar and its inversion to 133.0 (n = 4: 208.6), at 3.4 times the cost: docs/FIDELITY.md, "Contact
-          geometry"). Range: "segment" or "smooth". Default: "segment". Paper: "segment".
+          wavers by 0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.89 % of
+          F bar and its inversion to 133.0 (n = 4: 208.6), at 1.4 times the instructions: docs/FIDELITY.md,
+          "Contact geometry"). Range: "segment" or "smooth". Default: "segment". Paper: "segment".
       nodes: Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the
           paper's rod is resolved (docs/FIDELITY.md, "Any rod": the convergence in K). The report's params
           give the K used. Range: null or integer in 51..=4001. null: edges of at most 2.08 h (the paper's L =

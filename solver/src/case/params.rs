@@ -310,8 +310,8 @@ pub const PARAMETERS: &[Parameter] = &[
               edge's period in force curves) or \"smooth\" (C1 cubic curves through the nodes smoothed by an eighth \
               towards their neighbours, half the chords' sag inside the nodes' circle: gap, normal and the forces' \
               weights on the nodes vary smoothly as one rod slides along another; a rope pulled over a rod wavers by \
-              0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.92 % of F bar \
-              and its inversion to 133.0 (n = 4: 208.6), at 3.4 times the cost: docs/FIDELITY.md, \"Contact \
+              0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.89 % of F bar \
+              and its inversion to 133.0 (n = 4: 208.6), at 1.4 times the instructions: docs/FIDELITY.md, \"Contact \
               geometry\").",
         value: UNCHECKED,
     },

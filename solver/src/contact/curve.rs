@@ -304,18 +304,18 @@ pub fn closest_points_from(a: &Piece, b: &Piece, start: (f64, f64)) -> CurvePair
             (false, false) => {
                 let full = || trial(newton_2x2(gs, gt, hss, hst, htt, aa, bb));
                 let flat = smallest_scaled_curvature(hss, hst, htt, aa, bb).abs() < FLAT_CURVATURE;
-                match stiff_step(gs, gt, hss, hst, htt, aa, bb) {
-                    _ if !flat => full(),
+                match flat.then(|| stiff_step(gs, gt, hss, hst, htt, aa, bb)) {
+                    None => full(),
                     // The floor's slope could not gain FLAT_DISTANCE chords
                     // within a step of MAX_STEP: the stiff step alone.
-                    Some((stiff, slope)) if slope * MAX_STEP < 2.0 * f0.sqrt() * FLAT_DISTANCE => {
+                    Some(Some((stiff, slope))) if slope * MAX_STEP < 2.0 * f0.sqrt() * FLAT_DISTANCE => {
                         trial(stiff)
                     }
-                    Some((stiff, _)) => {
+                    Some(Some((stiff, _))) => {
                         let (stiff, full) = (trial(stiff), full());
                         if stiff.4 - full.4 >= gain { full } else { stiff }
                     }
-                    None => {
+                    Some(None) => {
                         let full = full();
                         if f0 - full.4 < gain {
                             break;

@@ -31,7 +31,7 @@ const CROSSBAR_SAG: f64 = 1e-2;
 /// drum; this rope has bending stiffness (EI / (R^2 T) = 1.5 %) and meets the
 /// drum at nodes 2 mm apart, and its tension ratio falls short by 0.5-0.8 %
 /// of mu phi: the tolerance is 2 % of mu phi.
-const CAPSTAN_PER_MU_PHI: f64 = 0.02;
+pub const CAPSTAN_PER_MU_PHI: f64 = 0.02;
 /// The washboard row's bound (the issue's): a pulling force that wavers at
 /// the edges' scale by at most 0.5 % of the normal force it carries.
 const WASHBOARD: f64 = 5e-3;

@@ -54,9 +54,8 @@ pub struct Piece {
     /// Local node ids in stencil order; past an end, the end node (weight
     /// zero: a reflected point's weight folds into the nodes it is made of).
     pub nodes: [usize; STENCIL],
-    /// For each control point, the nodes it is made of: `(slot, factor)`
-    /// pairs (the second `factor` zero inside the rod).
-    folds: [[(usize, f64); 2]; STENCIL],
+    /// The rod's node count.
+    rod_nodes: usize,
     /// The piece in powers of `u`: `x(u) = sum_j power_j u^j`.
     power: [Vector3<f64>; 4],
 }
@@ -112,49 +111,70 @@ fn basis(u: f64) -> [f64; STENCIL] {
     ])
 }
 
+/// Whether piece `e` of a rod of `n` nodes has its whole stencil inside
+/// the rod (no reflected node).
+#[inline]
+fn interior(n: usize, e: usize) -> bool {
+    e >= 2 && e + 3 < n
+}
+
+/// Node `e + o` of a rod of `n` nodes, clamped to the rod.
+#[inline]
+fn clamp_node(n: usize, e: usize, o: isize) -> usize {
+    (e as isize + o).clamp(0, n as isize - 1) as usize
+}
+
+/// For each control point of an end piece `e` (stencil `nodes`), the
+/// nodes it is made of: `(slot, factor)` pairs, the second `factor` zero
+/// where the point is a node itself; past an end `P_(-k) = 2 P_0 - P_k`.
+fn folds(n: usize, e: usize, nodes: &[usize; STENCIL]) -> [[(usize, f64); 2]; STENCIL] {
+    let last = n as isize - 1;
+    let slot = |i: usize| nodes.iter().position(|&k| k == i).unwrap_or(0);
+    OFFSETS.map(|o| {
+        let i = e as isize + o;
+        if i < 0 {
+            [(slot(0), 2.0), (slot(clamp_node(n, 0, -i)), -1.0)]
+        } else if i > last {
+            [
+                (slot(last as usize), 2.0),
+                (slot(clamp_node(n, 0, 2 * last - i)), -1.0),
+            ]
+        } else {
+            [(slot(i as usize), 1.0), (0, 0.0)]
+        }
+    })
+}
+
 impl Piece {
     /// Piece `e` of the centre line through the `n` nodes `node(0..n)`
     /// (`e + 1 < n`).
+    #[inline]
     pub fn new(n: usize, e: usize, node: impl Fn(usize) -> Vector3<f64>) -> Self {
         debug_assert!(e + 1 < n);
-        let last = n as isize - 1;
-        let clamp = |i: isize| i.clamp(0, last) as usize;
-        let nodes = OFFSETS.map(|o| clamp(e as isize + o));
-        let interior = e >= 2 && e as isize + 3 <= last;
-        let folds = if interior {
-            std::array::from_fn(|k| [(k, 1.0), (0, 0.0)])
+        let (nodes, control) = if interior(n, e) {
+            let nodes = OFFSETS.map(|o| e.wrapping_add_signed(o));
+            (nodes, nodes.map(&node))
         } else {
-            let slot = |i: usize| nodes.iter().position(|&k| k == i).unwrap_or(0);
-            OFFSETS.map(|o| {
-                let i = e as isize + o;
-                if i < 0 {
-                    [(slot(0), 2.0), (slot(clamp(-i)), -1.0)]
-                } else if i > last {
-                    [(slot(last as usize), 2.0), (slot(clamp(2 * last - i)), -1.0)]
-                } else {
-                    [(slot(i as usize), 1.0), (0, 0.0)]
-                }
-            })
+            let nodes = OFFSETS.map(|o| clamp_node(n, e, o));
+            let folds = folds(n, e, &nodes);
+            let control = std::array::from_fn(|k| {
+                let [(a, fa), (b, fb)] = folds[k];
+                let p = fa * node(nodes[a]);
+                if fb == 0.0 { p } else { p + fb * node(nodes[b]) }
+            });
+            (nodes, control)
         };
-        let control = std::array::from_fn(|k| {
-            if interior {
-                return node(nodes[k]);
-            }
-            let [(a, fa), (b, fb)] = folds[k];
-            let p = fa * node(nodes[a]);
-            if fb == 0.0 { p } else { p + fb * node(nodes[b]) }
-        });
-        let power = POWERS.map(|w| {
-            let mut x = w[0] * control[0];
+        let mut power = [Vector3::zeros(); 4];
+        for (x, w) in power.iter_mut().zip(&POWERS) {
+            *x = w[0] * control[0];
             for k in 1..STENCIL {
-                x += w[k] * control[k];
+                *x += w[k] * control[k];
             }
-            x
-        });
+        }
         Self {
             control,
             nodes,
-            folds,
+            rod_nodes: n,
             power,
         }
     }
@@ -184,8 +204,12 @@ impl Piece {
     /// `weights_k F` on node `nodes_k`.
     pub fn weights(&self, u: f64) -> [f64; STENCIL] {
         let b = basis(u);
+        let (n, e) = (self.rod_nodes, self.nodes[0]);
+        if interior(n, e) {
+            return b;
+        }
         let mut w = [0.0; STENCIL];
-        for (k, fold) in self.folds.iter().enumerate() {
+        for (k, fold) in folds(n, e, &self.nodes).iter().enumerate() {
             for &(slot, factor) in fold {
                 w[slot] += factor * b[k];
             }

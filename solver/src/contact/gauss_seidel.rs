@@ -427,12 +427,12 @@ fn self_block(contact: &ContactPoint, inv_mass: &[f64]) -> f64 {
     let (nodes, weights) = contact.stencil();
     let mut sum = 0.0;
     for (a, (&ka, &wa)) in nodes.iter().zip(weights).enumerate() {
-        let same: f64 = nodes[a..]
-            .iter()
-            .zip(&weights[a..])
-            .filter(|&(&kb, _)| kb == ka)
-            .map(|(_, &wb)| wb)
-            .sum();
+        let mut same = wa;
+        for (&kb, &wb) in nodes[a + 1..].iter().zip(&weights[a + 1..]) {
+            if kb == ka {
+                same += wb;
+            }
+        }
         sum += inv_mass[ka] * wa * (2.0 * same - wa);
     }
     sum

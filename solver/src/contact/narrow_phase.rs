@@ -78,8 +78,8 @@ pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vect
 /// one, can drop none of them). Buffers are reused.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Merge {
-    /// The taking part pairs, nearest first.
-    order: Vec<usize>,
+    /// The taking part pairs, nearest first: (distance's bits, index).
+    order: Vec<(u64, usize)>,
     /// `first[i]`: the first pair whose lower segment is `i` or more
     /// (pairs are sorted by `(i, j)`).
     first: Vec<usize>,
@@ -99,11 +99,14 @@ impl Merge {
     ) {
         let Self { order, first, keep } = self;
         order.clear();
-        order.extend((0..pairs.len()).filter(|&k| {
+        // Keyed by the distance's bits (non-negative floats order as their
+        // bits) and the index: nearest first, ties in pair order.
+        order.extend((0..pairs.len()).filter_map(|k| {
             let p = &pairs[k];
-            curves[k].distance < segments[p.i].radius + segments[p.j].radius + margin
+            let d = curves[k].distance;
+            (d < segments[p.i].radius + segments[p.j].radius + margin).then_some((d.max(0.0).to_bits(), k))
         }));
-        order.sort_unstable_by(|&a, &b| curves[a].distance.total_cmp(&curves[b].distance).then(a.cmp(&b)));
+        order.sort_unstable();
         first.clear();
         let mut k = 0;
         for i in 0..=segments.len() {
@@ -122,7 +125,7 @@ impl Merge {
                 && segments[n].index.abs_diff(segments[i].index) == d.unsigned_abs())
             .then_some(n)
         };
-        for &k in order.iter() {
+        for &(_, k) in order.iter() {
             let p = &pairs[k];
             let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
             let tol_a = fraction * (segments[p.i].b - segments[p.i].a).norm();

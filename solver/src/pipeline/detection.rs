@@ -195,24 +195,36 @@ impl World {
     }
 
     /// Largest penetration over the detected pairs at the current positions.
-    pub(super) fn max_penetration(&self) -> f64 {
+    pub(super) fn max_penetration(&mut self) -> f64 {
+        let mut ends = std::mem::take(&mut self.end_pieces);
+        ends.reset(self.segments.len());
         let detected = self
             .pair_ids
             .iter()
             .zip(&self.starts)
             .map(|(&id, &st)| (id, Some(st)));
         let dropped = self.implicit.dropped.iter().map(|&id| (id, None));
-        detected.chain(dropped).fold(0.0, |worst: f64, ((i, j), start)| {
-            worst.max(self.penetration(i, j, start))
-        })
+        let worst = detected.chain(dropped).fold(0.0, |worst: f64, ((i, j), start)| {
+            worst.max(self.penetration(i, j, start, &mut ends))
+        });
+        self.end_pieces = ends;
+        worst
     }
 
     /// How far segments `i` and `j` overlap at the current positions:
     /// `r_a + r_b` minus their distance (negative when apart).
     /// `i` is [`OBSTACLE`] for segment `j`'s contact with the obstacle.
     /// The smooth centre lines' closest points are sought from `start`
-    /// (the pair's parameters at detection), or from the chords'.
-    pub(super) fn penetration(&self, i: usize, j: usize, start: Option<(f64, f64)>) -> f64 {
+    /// (the pair's parameters at detection), or from the chords', on the
+    /// pieces `ends` holds for the current positions (reset since the rods
+    /// last moved).
+    pub(super) fn penetration(
+        &self,
+        i: usize,
+        j: usize,
+        start: Option<(f64, f64)>,
+        ends: &mut EndPieces,
+    ) -> f64 {
         if i == OBSTACLE {
             let s = &self.segments[j];
             let rod = &self.rods[s.body];
@@ -223,10 +235,12 @@ impl World {
         let (sa, sb) = (&self.segments[i], &self.segments[j]);
         let distance = match self.contact.geometry {
             Geometry::Smooth => {
-                let (a, b) = pieces(&self.rods, sa, sb);
+                let a = ends.get(&self.rods, &self.segments, i);
+                let b = ends.get(&self.rods, &self.segments, j);
+                let (a, b) = (&ends.pieces[a], &ends.pieces[b]);
                 match start {
-                    Some(start) => closest_points_from(&a, &b, start).distance,
-                    None => closest_points_on_pieces(&a, &b).distance,
+                    Some(start) => closest_points_from(a, b, start).distance,
+                    None => closest_points_on_pieces(a, b).distance,
                 }
             }
             Geometry::Segment => {
@@ -244,14 +258,35 @@ impl World {
     }
 }
 
-/// The pieces of the rods' smooth centre lines over segments `sa` and `sb`,
-/// at the rods' current positions.
-fn pieces(rods: &[Rod], sa: &Segment, sb: &Segment) -> (Piece, Piece) {
-    let piece = |seg: &Segment| {
-        let rod = &rods[seg.body];
-        Piece::new(rod.nodes(), seg.index, |i| rod.node(i))
-    };
-    (piece(sa), piece(sb))
+/// Pieces of the smooth centre lines at the rods' current positions, each
+/// built the first time a segment asks for it. Buffers are reused.
+#[derive(Clone, Default)]
+pub(super) struct EndPieces {
+    /// For each segment, its piece's index in `pieces` (`usize::MAX`: not
+    /// built yet).
+    index: Vec<usize>,
+    pieces: Vec<Piece>,
+}
+
+impl EndPieces {
+    /// Forgets every piece (the rods have moved), for `segments` segments.
+    pub(super) fn reset(&mut self, segments: usize) {
+        self.index.clear();
+        self.index.resize(segments, usize::MAX);
+        self.pieces.clear();
+    }
+
+    /// The index in `pieces` of segment `k`'s piece, built if needed.
+    fn get(&mut self, rods: &[Rod], segments: &[Segment], k: usize) -> usize {
+        if self.index[k] == usize::MAX {
+            let seg = &segments[k];
+            let rod = &rods[seg.body];
+            self.index[k] = self.pieces.len();
+            self.pieces
+                .push(Piece::new(rod.nodes(), seg.index, |i| rod.node(i)));
+        }
+        self.index[k]
+    }
 }
 
 /// A candidate pair whose pieces cannot touch: its chords' closest points

@@ -178,10 +178,12 @@ impl World {
     /// positions bring closer than `r_a + r_b`; the others' pairs go to
     /// `implicit.dropped` (their penetration is still watched).
     fn keep_predicted(&mut self) {
+        let mut ends = std::mem::take(&mut self.end_pieces);
+        ends.reset(self.segments.len());
         let mut kept = 0;
         for k in 0..self.contacts.len() {
             let (i, j) = self.pair_ids[k];
-            if self.penetration(i, j, Some(self.starts[k])) > 0.0 {
+            if self.penetration(i, j, Some(self.starts[k]), &mut ends) > 0.0 {
                 self.contacts[kept] = self.contacts[k];
                 self.pair_ids[kept] = self.pair_ids[k];
                 self.starts[kept] = self.starts[k];
@@ -190,6 +192,7 @@ impl World {
                 self.implicit.dropped.push((i, j));
             }
         }
+        self.end_pieces = ends;
         self.contacts.truncate(kept);
         self.pair_ids.truncate(kept);
         self.starts.truncate(kept);

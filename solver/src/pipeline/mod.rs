@@ -91,6 +91,9 @@ pub struct World {
     /// and the piece's [`crate::contact::curve::Piece::chord_deviation_bound`].
     pieces: Vec<Piece>,
     deviations: Vec<f64>,
+    /// The pieces at the current positions, built as the step-end
+    /// penetration asks for them.
+    end_pieces: detection::EndPieces,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
     /// Which of `curves` stay after merging near-duplicates.
@@ -179,6 +182,7 @@ impl World {
             segments: Vec::new(),
             pieces: Vec::new(),
             deviations: Vec::new(),
+            end_pieces: detection::EndPieces::default(),
             curves: Vec::new(),
             merge: Merge::default(),
             gaps,

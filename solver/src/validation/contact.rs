@@ -1,6 +1,7 @@
 //! Contact cases (paper Sec. 3.2): crossing rods pressed together, a short rod
 //! on an inclined fixed rod (stick/slide), the capstan equation, and energy
 //! behaviour of frictionless bounces and of initially interpenetrating rods.
+use crate::contact::curve::Piece;
 use crate::contact::{ContactSolve, FrictionLaw, Geometry};
 use crate::external::Environment;
 use crate::material::Material;
@@ -435,12 +436,16 @@ pub fn washboard(phi: f64, geometry: Geometry) -> Result<(f64, f64), WorldError>
 /// middle, pressed onto it by a load N = 0.1 N on the two nodes of the
 /// touching segment; its free end is pulled along the rod by a force ramped
 /// from 0 to T = mu N / 2 over 0.2 s and then held for 0.2 s (mu = 0.5,
-/// damped, dt = 1 ms). Coulomb: T is inside the cone, the contact sticks and
-/// friction carries all of T, so the touching segment does not move along
-/// the rod and the clamped half stays unloaded. Returns (the segment's
-/// final displacement along the rod, the displacement if the contact slid
-/// freely and the clamped half carried T: T (L / 2) / EA).
-pub fn sticking_contact_creep(solve: ContactSolve) -> Result<(f64, f64), WorldError> {
+/// damped, dt = 1 ms), under the contact `geometry`. Coulomb: T is inside
+/// the cone, the contact sticks and friction carries all of T, so the rod's
+/// point in contact does not move along the rod and the clamped half stays
+/// unloaded. Returns (that point's final displacement along the rod, the
+/// displacement if the contact slid freely and the clamped half carried T:
+/// T (L / 2) / EA). The point in contact is the middle of the touching
+/// segment, on the smooth centre line under [`Geometry::Smooth`] (whose
+/// force reaches the six nodes around it, so the segment's own nodes move
+/// as the rod around the contact stretches).
+pub fn sticking_contact_creep(solve: ContactSolve, geometry: Geometry) -> Result<(f64, f64), WorldError> {
     let (h, length, k) = (1e-3, 0.1, 20);
     let material = Material {
         youngs_modulus: 1e7,
@@ -471,21 +476,25 @@ pub fn sticking_contact_creep(solve: ContactSolve) -> Result<(f64, f64), WorldEr
     let contact = ContactOptions {
         friction: mu,
         solve,
+        geometry,
         ..ContactOptions::default()
     };
+    let touching = |r: &Rod| match geometry {
+        Geometry::Segment => 0.5 * (r.node(9) + r.node(10)),
+        Geometry::Smooth => Piece::new(r.nodes(), 9, |i| r.node(i)).point(0.5),
+    };
+    let start = touching(&rod).x;
     let mut world = World::new(vec![rod, bar], env, contact, NewtonOptions::default());
     for node in [9, 10] {
         world.load_mut(0)[node_dof(node) + 2] = -0.5 * normal;
     }
-    let start = mid.x;
     let (dt, ramp, hold) = (1e-3, 200, 200);
     for step in 0..ramp + hold {
         let scale = ((step + 1) as f64 / ramp as f64).min(1.0);
         world.load_mut(0)[node_dof(k - 1)] = scale * pull;
         world.step(dt)?;
     }
-    let r = &world.rods[0];
-    Ok((0.5 * (r.node(9) + r.node(10)).x - start, slide))
+    Ok((touching(&world.rods[0]).x - start, slide))
 }
 
 /// A free rod thrown at a fixed rod with `mu = 0` and no damping: returns

@@ -426,7 +426,8 @@ fn solve_suffix(solve: crate::contact::ContactSolve) -> &'static str {
 /// paper's) lets it slide (`solver/tests/contact_validation.rs`).
 fn sticking_rows() -> Vec<CaseResult> {
     let name = "sticking_no_creep_implicit";
-    match contact::sticking_contact_creep(crate::contact::ContactSolve::Implicit) {
+    let geometry = crate::contact::Geometry::default();
+    match contact::sticking_contact_creep(crate::contact::ContactSolve::Implicit, geometry) {
         Ok((slip, slide)) => vec![CaseResult::with_error(
             name,
             &format!("sticking contact's slip along the rod / free-sliding stretch ({slide:.2e} m)"),

@@ -153,7 +153,11 @@ impl Piece {
         debug_assert!(e + 1 < n);
         let (nodes, control) = if interior(n, e) {
             let nodes = OFFSETS.map(|o| e.wrapping_add_signed(o));
-            (nodes, nodes.map(&node))
+            let mut control = [Vector3::zeros(); STENCIL];
+            for (c, &i) in control.iter_mut().zip(&nodes) {
+                *c = node(i);
+            }
+            (nodes, control)
         } else {
             let nodes = OFFSETS.map(|o| clamp_node(n, e, o));
             let folds = folds(n, e, &nodes);

@@ -141,7 +141,12 @@ impl Merge {
                     };
                     // Pairs are stored with i < j; a swapped key swaps the points.
                     let ((lo, hi), swapped) = if i < j { ((i, j), false) } else { ((j, i), true) };
-                    let Some(m) = (first[lo]..first[lo + 1]).find(|&m| pairs[m].j == hi) else {
+                    let range = first[lo]..first[lo + 1];
+                    let Some(m) = pairs[range.clone()]
+                        .binary_search_by_key(&hi, |q| q.j)
+                        .ok()
+                        .map(|m| range.start + m)
+                    else {
                         continue; // no such candidate (not a failure)
                     };
                     if !keep[m] {

@@ -312,9 +312,11 @@ pub fn closest_points_from(a: &Piece, b: &Piece, start: (f64, f64)) -> CurvePair
             (s1, t1, ja1, jb1, (ja1.x - jb1.x).norm_squared())
         };
         // In a flat valley a step along its floor must shorten the distance
-        // by FLAT_DISTANCE chords (in squares).
+        // by FLAT_DISTANCE chords (in squares; per unit of the scaled
+        // parameters, whose unit is a chord, and in the pieces' own).
         let f0 = d.norm_squared();
-        let gain = 2.0 * f0.sqrt() * FLAT_DISTANCE * aa.min(bb).sqrt();
+        let per_chord = 2.0 * f0.sqrt() * FLAT_DISTANCE;
+        let gain = per_chord * aa.min(bb).sqrt();
         let (s1, t1, ja1, jb1, f1) = match (hold_s, hold_t) {
             (true, true) => break,
             (true, false) | (false, true) => {
@@ -336,9 +338,7 @@ pub fn closest_points_from(a: &Piece, b: &Piece, start: (f64, f64)) -> CurvePair
                     None => full(),
                     // The floor's slope could not gain FLAT_DISTANCE chords
                     // within a step of MAX_STEP: the stiff step alone.
-                    Some(Some((stiff, slope))) if slope * MAX_STEP < 2.0 * f0.sqrt() * FLAT_DISTANCE => {
-                        trial(stiff)
-                    }
+                    Some(Some((stiff, slope))) if slope * MAX_STEP < per_chord => trial(stiff),
                     Some(Some((stiff, _))) => {
                         let (stiff, full) = (trial(stiff), full());
                         if stiff.4 - full.4 >= gain { full } else { stiff }

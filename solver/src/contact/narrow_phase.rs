@@ -132,30 +132,39 @@ impl Merge {
             let tol_b = fraction * (segments[p.j].b - segments[p.j].a).norm();
             let mut duplicate = false;
             'around: for di in -1..=1 {
+                let Some(i) = step(p.i, di) else {
+                    continue;
+                };
+                // Row `i` of the pairs, sorted by `j`: its pairs with `j`
+                // below the neighbour sought are passed once, as `dj` grows.
+                let row = first[i]..first[i + 1];
+                let mut m = row.start;
                 for dj in -1..=1 {
                     if (di, dj) == (0, 0) {
                         continue;
                     }
-                    let (Some(i), Some(j)) = (step(p.i, di), step(p.j, dj)) else {
+                    let Some(j) = step(p.j, dj) else {
                         continue;
                     };
                     // Pairs are stored with i < j; a swapped key swaps the points.
-                    let ((lo, hi), swapped) = if i < j { ((i, j), false) } else { ((j, i), true) };
-                    let range = first[lo]..first[lo + 1];
-                    let Some(m) = pairs[range.clone()]
-                        .binary_search_by_key(&hi, |q| q.j)
-                        .ok()
-                        .map(|m| range.start + m)
-                    else {
-                        continue; // no such candidate (not a failure)
-                    };
-                    if !keep[m] {
-                        continue;
-                    }
-                    let (ma, mb) = if swapped {
-                        (&curves[m].point_b, &curves[m].point_a)
+                    let (found, swapped) = if i < j {
+                        while m < row.end && pairs[m].j < j {
+                            m += 1;
+                        }
+                        ((m < row.end && pairs[m].j == j).then_some(m), false)
                     } else {
-                        (&curves[m].point_a, &curves[m].point_b)
+                        let range = first[j]..first[j + 1];
+                        let found = pairs[range.clone()].binary_search_by_key(&i, |q| q.j).ok();
+                        (found.map(|n| range.start + n), true)
+                    };
+                    // No such candidate (not a failure), or not kept.
+                    let Some(n) = found.filter(|&n| keep[n]) else {
+                        continue;
+                    };
+                    let (ma, mb) = if swapped {
+                        (&curves[n].point_b, &curves[n].point_a)
+                    } else {
+                        (&curves[n].point_a, &curves[n].point_b)
                     };
                     if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b {
                         duplicate = true;

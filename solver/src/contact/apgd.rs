@@ -265,7 +265,6 @@ impl Apgd {
         self.lipschitz = lipschitz;
         SolveReport {
             sweeps: products,
-            residual: best_residual,
             converged: best_residual <= options.tolerance,
         }
     }

@@ -145,29 +145,59 @@ fn folds(n: usize, e: usize, nodes: &[usize; STENCIL]) -> [[(usize, f64); 2]; ST
     })
 }
 
+/// Piece `e`'s local node ids in stencil order and control points, of the
+/// centre line through the `n` nodes `node(0..n)` (`e + 1 < n`).
+#[inline]
+fn control_points(
+    n: usize,
+    e: usize,
+    node: impl Fn(usize) -> Vector3<f64>,
+) -> ([usize; STENCIL], [Vector3<f64>; STENCIL]) {
+    debug_assert!(e + 1 < n);
+    if interior(n, e) {
+        let nodes = OFFSETS.map(|o| e.wrapping_add_signed(o));
+        let mut control = [Vector3::zeros(); STENCIL];
+        for (c, &i) in control.iter_mut().zip(&nodes) {
+            *c = node(i);
+        }
+        (nodes, control)
+    } else {
+        let nodes = OFFSETS.map(|o| clamp_node(n, e, o));
+        let folds = folds(n, e, &nodes);
+        let control = std::array::from_fn(|k| {
+            let [(a, fa), (b, fb)] = folds[k];
+            let p = fa * node(nodes[a]);
+            if fb == 0.0 { p } else { p + fb * node(nodes[b]) }
+        });
+        (nodes, control)
+    }
+}
+
+/// [`Piece::chord_deviation_bound`] of the piece with control points `c`.
+#[inline]
+fn deviation_bound(c: &[Vector3<f64>; STENCIL]) -> f64 {
+    // Stencil order: e, e+1, e-1, e+2, e-2, e+3.
+    let d = c[1] - c[0];
+    let m0 = (c[4] - 8.0 * c[2] + 8.0 * c[1] - c[3]) / 12.0;
+    let m1 = (c[2] - 8.0 * c[0] + 8.0 * c[3] - c[5]) / 12.0;
+    let d0 = SMOOTHING * (0.5 * (c[2] + c[1]) - c[0]);
+    let d1 = SMOOTHING * (0.5 * (c[0] + c[3]) - c[1]);
+    d0.norm().max(d1.norm()) + 4.0 / 27.0 * ((m0 - d).norm() + (m1 - d).norm())
+}
+
+/// [`Piece::chord_deviation_bound`] of piece `e` of the centre line through
+/// the `n` nodes `node(0..n)`, without building the piece.
+#[inline]
+pub fn chord_deviation_bound(n: usize, e: usize, node: impl Fn(usize) -> Vector3<f64>) -> f64 {
+    deviation_bound(&control_points(n, e, node).1)
+}
+
 impl Piece {
     /// Piece `e` of the centre line through the `n` nodes `node(0..n)`
     /// (`e + 1 < n`).
     #[inline]
     pub fn new(n: usize, e: usize, node: impl Fn(usize) -> Vector3<f64>) -> Self {
-        debug_assert!(e + 1 < n);
-        let (nodes, control) = if interior(n, e) {
-            let nodes = OFFSETS.map(|o| e.wrapping_add_signed(o));
-            let mut control = [Vector3::zeros(); STENCIL];
-            for (c, &i) in control.iter_mut().zip(&nodes) {
-                *c = node(i);
-            }
-            (nodes, control)
-        } else {
-            let nodes = OFFSETS.map(|o| clamp_node(n, e, o));
-            let folds = folds(n, e, &nodes);
-            let control = std::array::from_fn(|k| {
-                let [(a, fa), (b, fb)] = folds[k];
-                let p = fa * node(nodes[a]);
-                if fb == 0.0 { p } else { p + fb * node(nodes[b]) }
-            });
-            (nodes, control)
-        };
+        let (nodes, control) = control_points(n, e, node);
         let mut power = [Vector3::zeros(); 4];
         for (x, w) in power.iter_mut().zip(&POWERS) {
             *x = w[0] * control[0];
@@ -227,14 +257,7 @@ impl Piece {
     /// `d = P_(e+1) - P_e`, `h00, h01 >= 0` summing to 1 and
     /// `|h10|, |h11| <= 4 / 27`.
     pub fn chord_deviation_bound(&self) -> f64 {
-        let c = &self.control;
-        // Stencil order: e, e+1, e-1, e+2, e-2, e+3.
-        let d = c[1] - c[0];
-        let m0 = (c[4] - 8.0 * c[2] + 8.0 * c[1] - c[3]) / 12.0;
-        let m1 = (c[2] - 8.0 * c[0] + 8.0 * c[3] - c[5]) / 12.0;
-        let d0 = SMOOTHING * (0.5 * (c[2] + c[1]) - c[0]);
-        let d1 = SMOOTHING * (0.5 * (c[0] + c[3]) - c[1]);
-        d0.norm().max(d1.norm()) + 4.0 / 27.0 * ((m0 - d).norm() + (m1 - d).norm())
+        deviation_bound(&self.control)
     }
 }
 

@@ -102,7 +102,6 @@ impl DenseGaussSeidel {
         }
         Ok(SolveReport {
             sweeps,
-            residual: self.residual(p),
             converged,
         })
     }

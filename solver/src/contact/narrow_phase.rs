@@ -76,14 +76,46 @@ pub(crate) fn sliding_direction(u: &Vector3<f64>, normal: &Vector3<f64>) -> Vect
 /// edges or closer. Only pairs closer than their radii plus `margin` can
 /// become contacts and take part (a farther pair, taken after every nearer
 /// one, can drop none of them). Buffers are reused.
+///
+/// "Nearest first" needs no sort: a pair's fate depends only on its nearer
+/// neighbours', so each pair is decided once, after the nearer neighbours
+/// within reach of its points ([`Merge::decide`]).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Merge {
-    /// The taking part pairs, nearest first: (distance's bits, index).
-    order: Vec<(u64, usize)>,
     /// `first[i]`: the first pair whose lower segment is `i` or more
     /// (pairs are sorted by `(i, j)`).
     first: Vec<usize>,
-    keep: Vec<bool>,
+    /// Each pair's rank: nearer pairs first, ties in pair order; `None` for
+    /// a pair that takes no part.
+    rank: Vec<Option<(u64, usize)>>,
+    fate: Vec<Fate>,
+}
+
+/// What [`Merge`] has decided for a pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Fate {
+    Open,
+    Kept,
+    Dropped,
+}
+
+/// One [`Merge::run`]'s inputs.
+struct Candidates<'a> {
+    pairs: &'a [CandidatePair],
+    curves: &'a [CurvePair],
+    segments: &'a [Segment],
+    fraction: f64,
+}
+
+impl Candidates<'_> {
+    /// Segment `i`'s neighbour `d` along its rod, if any.
+    #[inline]
+    fn step(&self, i: usize, d: isize) -> Option<usize> {
+        let n = i.checked_add_signed(d)?;
+        let s = self.segments;
+        (n < s.len() && s[n].body == s[i].body && s[n].index.abs_diff(s[i].index) == d.unsigned_abs())
+            .then_some(n)
+    }
 }
 
 impl Merge {
@@ -97,88 +129,100 @@ impl Merge {
         fraction: f64,
         margin: f64,
     ) {
-        let Self { order, first, keep } = self;
-        order.clear();
-        // Keyed by the distance's bits (non-negative floats order as their
-        // bits) and the index: nearest first, ties in pair order.
-        order.extend((0..pairs.len()).filter_map(|k| {
-            let p = &pairs[k];
-            let d = curves[k].distance;
+        // Ranked by the distance's bits (non-negative floats order as their
+        // bits) and the index.
+        self.rank.clear();
+        self.rank.extend(pairs.iter().zip(curves).enumerate().map(|(k, (p, c))| {
+            let d = c.distance;
             (d < segments[p.i].radius + segments[p.j].radius + margin).then_some((d.max(0.0).to_bits(), k))
         }));
-        order.sort_unstable();
-        first.clear();
+        self.first.clear();
         let mut k = 0;
         for i in 0..=segments.len() {
             while k < pairs.len() && pairs[k].i < i {
                 k += 1;
             }
-            first.push(k);
+            self.first.push(k);
         }
-        keep.clear();
-        keep.resize(pairs.len(), false);
-        // Segment `i`'s neighbour `d` along its rod, if any.
-        let step = |i: usize, d: isize| {
-            let n = i.checked_add_signed(d)?;
-            (n < segments.len()
-                && segments[n].body == segments[i].body
-                && segments[n].index.abs_diff(segments[i].index) == d.unsigned_abs())
-            .then_some(n)
+        self.fate.clear();
+        self.fate.resize(pairs.len(), Fate::Open);
+        let candidates = Candidates {
+            pairs,
+            curves,
+            segments,
+            fraction,
         };
-        for &(_, k) in order.iter() {
-            let p = &pairs[k];
-            let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
-            let tol_a = fraction * (segments[p.i].b - segments[p.i].a).norm();
-            let tol_b = fraction * (segments[p.j].b - segments[p.j].a).norm();
-            let mut duplicate = false;
-            'around: for di in -1..=1 {
-                let Some(i) = step(p.i, di) else {
+        for k in 0..pairs.len() {
+            if self.rank[k].is_some() {
+                self.decide(&candidates, k);
+            }
+        }
+    }
+
+    /// Whether pair `k` (taking part) stays: unless a nearer neighbour pair
+    /// that stays has its points within reach of `k`'s. Each pair is decided
+    /// once; the recursion descends to nearer pairs only.
+    fn decide(&mut self, c: &Candidates, k: usize) -> bool {
+        match self.fate[k] {
+            Fate::Kept => return true,
+            Fate::Dropped => return false,
+            Fate::Open => {}
+        }
+        let (pairs, curves, segments) = (c.pairs, c.curves, c.segments);
+        let p = &pairs[k];
+        let rank = self.rank[k];
+        let (ca, cb) = (&curves[k].point_a, &curves[k].point_b);
+        let tol_a = c.fraction * (segments[p.i].b - segments[p.i].a).norm();
+        let tol_b = c.fraction * (segments[p.j].b - segments[p.j].a).norm();
+        let mut kept = true;
+        'around: for di in -1..=1 {
+            let Some(i) = c.step(p.i, di) else {
+                continue;
+            };
+            // Row `i` of the pairs, sorted by `j`: its pairs with `j` below
+            // the neighbour sought are passed once, as `dj` grows.
+            let row = self.first[i]..self.first[i + 1];
+            let mut m = row.start;
+            for dj in -1..=1 {
+                if (di, dj) == (0, 0) {
+                    continue;
+                }
+                let Some(j) = c.step(p.j, dj) else {
                     continue;
                 };
-                // Row `i` of the pairs, sorted by `j`: its pairs with `j`
-                // below the neighbour sought are passed once, as `dj` grows.
-                let row = first[i]..first[i + 1];
-                let mut m = row.start;
-                for dj in -1..=1 {
-                    if (di, dj) == (0, 0) {
-                        continue;
+                // Pairs are stored with i < j; a swapped key swaps the points.
+                let (found, swapped) = if i < j {
+                    while m < row.end && pairs[m].j < j {
+                        m += 1;
                     }
-                    let Some(j) = step(p.j, dj) else {
-                        continue;
-                    };
-                    // Pairs are stored with i < j; a swapped key swaps the points.
-                    let (found, swapped) = if i < j {
-                        while m < row.end && pairs[m].j < j {
-                            m += 1;
-                        }
-                        ((m < row.end && pairs[m].j == j).then_some(m), false)
-                    } else {
-                        let range = first[j]..first[j + 1];
-                        let found = pairs[range.clone()].binary_search_by_key(&i, |q| q.j).ok();
-                        (found.map(|n| range.start + n), true)
-                    };
-                    // No such candidate (not a failure), or not kept.
-                    let Some(n) = found.filter(|&n| keep[n]) else {
-                        continue;
-                    };
-                    let (ma, mb) = if swapped {
-                        (&curves[n].point_b, &curves[n].point_a)
-                    } else {
-                        (&curves[n].point_a, &curves[n].point_b)
-                    };
-                    if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b {
-                        duplicate = true;
-                        break 'around;
-                    }
+                    ((m < row.end && pairs[m].j == j).then_some(m), false)
+                } else {
+                    let range = self.first[j]..self.first[j + 1];
+                    let found = pairs[range.clone()].binary_search_by_key(&i, |q| q.j).ok();
+                    (found.map(|n| range.start + n), true)
+                };
+                // No such candidate (not a failure), or not nearer.
+                let Some(n) = found.filter(|&n| self.rank[n].is_some() && self.rank[n] < rank) else {
+                    continue;
+                };
+                let (ma, mb) = if swapped {
+                    (&curves[n].point_b, &curves[n].point_a)
+                } else {
+                    (&curves[n].point_a, &curves[n].point_b)
+                };
+                if (ma - ca).norm() <= tol_a && (mb - cb).norm() <= tol_b && self.decide(c, n) {
+                    kept = false;
+                    break 'around;
                 }
             }
-            keep[k] = !duplicate;
         }
+        self.fate[k] = if kept { Fate::Kept } else { Fate::Dropped };
+        kept
     }
 
     /// Whether pair `k` of the last [`Merge::run`] stays.
     pub(crate) fn keep(&self, k: usize) -> bool {
-        self.keep[k]
+        self.fate[k] == Fate::Kept
     }
 }
 

@@ -3,7 +3,7 @@
 //! penetrations the step's end leaves.
 use super::{Body, World, WorldError};
 use crate::contact::broad_phase::Segment;
-use crate::contact::curve::{CurvePair, Piece, closest_points_from, closest_points_on_pieces};
+use crate::contact::curve::{CurvePair, Piece, chord_deviation_bound, closest_points_from, closest_points_on_pieces};
 use crate::contact::segment::{SegmentPair, closest_points};
 use crate::contact::{Candidates, ContactPoint, FrictionLaw, Geometry, narrow_phase};
 use crate::rod::Rod;
@@ -53,14 +53,13 @@ impl World {
         }
         let margin = self.contact.margin * largest_radius + 2.0 * fastest * dt;
         let smooth = self.contact.geometry == Geometry::Smooth;
-        self.pieces.clear();
+        self.pieces.reset(self.segments.len());
         self.deviations.clear();
         if smooth {
             for seg in &self.segments {
                 let rod = &self.rods[seg.body];
-                let piece = Piece::new(rod.nodes(), seg.index, |i| rod.node(i));
-                self.deviations.push(piece.chord_deviation_bound());
-                self.pieces.push(piece);
+                self.deviations
+                    .push(chord_deviation_bound(rod.nodes(), seg.index, |i| rod.node(i)));
             }
         }
         // A smooth centre line strays from its chords by at most its pieces'
@@ -73,14 +72,18 @@ impl World {
         self.curves.clear();
         if smooth {
             // A pair whose chords lie further apart than a contact reaches
-            // plus both pieces' bounds cannot touch: no closest points.
+            // plus both pieces' bounds cannot touch: no closest points (and
+            // no pieces).
+            let pieces = &mut self.pieces;
             self.curves.extend(pairs.iter().map(|p| {
                 let (sa, sb) = (&self.segments[p.i], &self.segments[p.j]);
                 let beyond = sa.radius + sb.radius + margin + self.deviations[p.i] + self.deviations[p.j];
                 if p.closest.distance >= beyond {
                     apart(&p.closest)
                 } else {
-                    closest_points_from(&self.pieces[p.i], &self.pieces[p.j], (p.closest.s, p.closest.t))
+                    let a = pieces.get(&self.rods, &self.segments, p.i);
+                    let b = pieces.get(&self.rods, &self.segments, p.j);
+                    closest_points_from(&pieces.pieces[a], &pieces.pieces[b], (p.closest.s, p.closest.t))
                 }
             }));
             self.merge
@@ -118,7 +121,7 @@ impl World {
                 if curve.distance >= contact_distance + margin {
                     continue;
                 }
-                let (a, b) = (&self.pieces[p.i], &self.pieces[p.j]);
+                let (a, b) = (self.pieces.built(p.i), self.pieces.built(p.j));
                 let stencil =
                     |piece: &Piece, u: f64, first: usize| (piece.nodes.map(|i| first + i), piece.weights(u));
                 ContactPoint::from_curves(
@@ -223,7 +226,7 @@ impl World {
         i: usize,
         j: usize,
         start: Option<(f64, f64)>,
-        ends: &mut EndPieces,
+        ends: &mut Pieces,
     ) -> f64 {
         if i == OBSTACLE {
             let s = &self.segments[j];
@@ -261,14 +264,14 @@ impl World {
 /// Pieces of the smooth centre lines at the rods' current positions, each
 /// built the first time a segment asks for it. Buffers are reused.
 #[derive(Clone, Default)]
-pub(super) struct EndPieces {
+pub(super) struct Pieces {
     /// For each segment, its piece's index in `pieces` (`usize::MAX`: not
     /// built yet).
     index: Vec<usize>,
     pieces: Vec<Piece>,
 }
 
-impl EndPieces {
+impl Pieces {
     /// Forgets every piece (the rods have moved), for `segments` segments.
     pub(super) fn reset(&mut self, segments: usize) {
         self.index.clear();
@@ -286,6 +289,11 @@ impl EndPieces {
                 .push(Piece::new(rod.nodes(), seg.index, |i| rod.node(i)));
         }
         self.index[k]
+    }
+
+    /// Segment `k`'s piece, built by [`Pieces::get`] since the last reset.
+    fn built(&self, k: usize) -> &Piece {
+        &self.pieces[self.index[k]]
     }
 }
 

@@ -68,7 +68,6 @@ impl World {
             .gauss_seidel
             .solve_problem(&problem, &self.contact.solver, Some(&self.warm))?;
         report.contact_sweeps = sol.sweeps;
-        report.contact_residual = sol.residual;
         report.active_contacts = self
             .gauss_seidel
             .contact_forces()

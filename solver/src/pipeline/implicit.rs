@@ -231,7 +231,6 @@ impl World {
         };
         let sol = b.solver.solve(&problem, &self.contact.solver, Some(&b.warm))?;
         report.contact_sweeps = sol.sweeps;
-        report.contact_residual = sol.residual;
         report.active_contacts = b.solver.forces().iter().filter(|r| r.x > 0.0).count();
         self.forces.clear();
         self.forces.extend(

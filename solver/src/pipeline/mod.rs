@@ -24,7 +24,7 @@ mod warm_start;
 
 pub use crate::contact::ContactOptions;
 use crate::contact::broad_phase::{BroadPhase, Segment, neighbour_gap};
-use crate::contact::curve::{CurvePair, Piece};
+use crate::contact::curve::CurvePair;
 use crate::contact::gauss_seidel::GaussSeidel;
 use crate::contact::narrow_phase::Merge;
 use crate::contact::{Candidates, ContactError, ContactPoint, ContactSolve, Cylinder};
@@ -47,9 +47,8 @@ pub struct WorldStepReport {
     pub active_contacts: usize,
     /// Largest penetration r_a + r_b - d over the contacts at the end of the step (m, 0 if none).
     pub max_penetration: f64,
-    /// Gauss-Seidel sweeps and final natural-map residual (relative).
+    /// Sweeps (or operator products) of the contact solve.
     pub contact_sweeps: usize,
-    pub contact_residual: f64,
     /// Newton iterations and substeps summed over the rods.
     pub newton_iterations: u32,
     pub substeps: u32,
@@ -87,13 +86,14 @@ pub struct World {
     broad: BroadPhase,
     gauss_seidel: GaussSeidel,
     segments: Vec<Segment>,
-    /// Each segment's piece of the smooth centre line at the step's start
-    /// and the piece's [`crate::contact::curve::Piece::chord_deviation_bound`].
-    pieces: Vec<Piece>,
+    /// The smooth centre line's pieces at the step's start, built as the
+    /// pairs' closest points ask for them, and each segment's
+    /// [`crate::contact::curve::chord_deviation_bound`].
+    pieces: detection::Pieces,
     deviations: Vec<f64>,
     /// The pieces at the current positions, built as the step-end
     /// penetration asks for them.
-    end_pieces: detection::EndPieces,
+    end_pieces: detection::Pieces,
     /// The smooth centre lines' closest points of each candidate pair.
     curves: Vec<CurvePair>,
     /// Which of `curves` stay after merging near-duplicates.
@@ -180,9 +180,9 @@ impl World {
             broad: BroadPhase::new(),
             gauss_seidel: GaussSeidel::new(),
             segments: Vec::new(),
-            pieces: Vec::new(),
+            pieces: detection::Pieces::default(),
             deviations: Vec::new(),
-            end_pieces: detection::EndPieces::default(),
+            end_pieces: detection::Pieces::default(),
             curves: Vec::new(),
             merge: Merge::default(),
             gaps,

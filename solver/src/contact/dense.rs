@@ -100,10 +100,7 @@ impl DenseGaussSeidel {
             converged = max_change2 <= options.tolerance.powi(2) * max_force2
                 || (sweeps % RESIDUAL_EVERY == 0 && self.residual(p) <= options.tolerance);
         }
-        Ok(SolveReport {
-            sweeps,
-            converged,
-        })
+        Ok(SolveReport { sweeps, converged })
     }
 
     /// Natural-map residual of the current iterate over the largest force

@@ -472,7 +472,11 @@ pub(super) fn validate(
         // `x * 0` is zero for every finite `x` and NaN otherwise: the sum is
         // zero exactly when every entry is finite.
         let mut zero = contact.gap * 0.0;
-        for x in weights.iter().chain(&contact.normal).chain(&contact.sliding_direction) {
+        for x in weights
+            .iter()
+            .chain(&contact.normal)
+            .chain(&contact.sliding_direction)
+        {
             zero += x * 0.0;
         }
         let unit = (contact.normal.norm() - 1.0).abs() <= NORMAL_TOL;
@@ -725,10 +729,7 @@ pub(crate) mod tests {
                 let report = gs
                     .solve(&contacts, &inv_mass, &v_free, 1e-2, &options, None)
                     .unwrap();
-                assert!(
-                    report.converged && gs.residual() <= 1e-10,
-                    "mu {mu}: {report:?}"
-                );
+                assert!(report.converged && gs.residual() <= 1e-10, "mu {mu}: {report:?}");
                 assert!(
                     gs.rows.iter().all(|row| row.r.x > 0.0),
                     "every contact of the stack carries load"

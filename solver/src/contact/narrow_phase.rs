@@ -132,10 +132,12 @@ impl Merge {
         // Ranked by the distance's bits (non-negative floats order as their
         // bits) and the index.
         self.rank.clear();
-        self.rank.extend(pairs.iter().zip(curves).enumerate().map(|(k, (p, c))| {
-            let d = c.distance;
-            (d < segments[p.i].radius + segments[p.j].radius + margin).then_some((d.max(0.0).to_bits(), k))
-        }));
+        self.rank
+            .extend(pairs.iter().zip(curves).enumerate().map(|(k, (p, c))| {
+                let d = c.distance;
+                (d < segments[p.i].radius + segments[p.j].radius + margin)
+                    .then_some((d.max(0.0).to_bits(), k))
+            }));
         self.first.clear();
         let mut k = 0;
         for i in 0..=segments.len() {

@@ -3,7 +3,9 @@
 //! penetrations the step's end leaves.
 use super::{Body, World, WorldError};
 use crate::contact::broad_phase::Segment;
-use crate::contact::curve::{CurvePair, Piece, chord_deviation_bound, closest_points_from, closest_points_on_pieces};
+use crate::contact::curve::{
+    CurvePair, Piece, chord_deviation_bound, closest_points_from, closest_points_on_pieces,
+};
 use crate::contact::segment::{SegmentPair, closest_points};
 use crate::contact::{Candidates, ContactPoint, FrictionLaw, Geometry, narrow_phase};
 use crate::rod::Rod;

@@ -2,7 +2,7 @@
 //! (the paper's method): free velocities from the start-of-step state and the
 //! contact problem on the lumped mass, solved by block Gauss-Seidel.
 use super::{World, WorldError, WorldStepReport};
-use crate::contact::{MassProblem, SpinDofs};
+use crate::contact::{Geometry, MassProblem, SpinDofs};
 use crate::energies::{self, Terms};
 use crate::external;
 use crate::rod::{node_dof, theta_dof};
@@ -52,8 +52,11 @@ impl World {
             }
             force.copy_from_slice(&body.load);
         }
-        // Warm start from the last steps' forces on the same segment pairs.
-        self.history.warm_start(&self.pair_ids, dt, &mut self.warm);
+        // Warm start from the last steps' forces on the same segment pairs
+        // (or, for smooth contacts, their neighbours).
+        let follow = self.contact.geometry == Geometry::Smooth;
+        self.history
+            .warm_start(&self.pair_ids, dt, follow, &mut self.warm);
         let problem = MassProblem {
             contacts: &self.contacts,
             inv_mass: &self.inv_mass,

@@ -18,7 +18,7 @@
 use super::{World, WorldError, WorldStepReport};
 use crate::contact::cone::ContactFrame;
 use crate::contact::dense::DenseGaussSeidel;
-use crate::contact::{Candidates, ContactPoint, ContactSolve, DenseProblem};
+use crate::contact::{Candidates, ContactPoint, ContactSolve, DenseProblem, Geometry};
 use crate::rod::{Rod, RodState, node_dof, theta_dof};
 use crate::stepper::StepError;
 use nalgebra::{Matrix3, Vector3};
@@ -215,7 +215,9 @@ impl World {
         }
         self.delassus(dt);
         let b = &mut self.implicit;
-        self.history.warm_start(&self.pair_ids, dt, &mut self.warm);
+        let follow = self.contact.geometry == Geometry::Smooth;
+        self.history
+            .warm_start(&self.pair_ids, dt, follow, &mut self.warm);
         b.warm.clear();
         b.warm.extend(
             b.frames

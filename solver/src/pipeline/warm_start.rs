@@ -39,8 +39,17 @@ impl ForceHistory {
     /// where the pair was in contact at the last two solves of this step
     /// size, the force extrapolated linearly from them (the pull changes
     /// the forces smoothly, so this is closer to the solution than the last
-    /// force); where only at the last, that force; else zero.
-    pub(super) fn warm_start(&self, pair_ids: &[(usize, usize)], dt: f64, out: &mut Vec<Vector3<f64>>) {
+    /// force); where only at the last, that force; else, with `follow`, the
+    /// last force of a neighbouring pair (segments `i +- 1`, `j +- 1`) that
+    /// is no longer a contact: a smooth contact sliding into the next
+    /// pieces (where merging keeps one pair of the neighbours), else zero.
+    pub(super) fn warm_start(
+        &self,
+        pair_ids: &[(usize, usize)],
+        dt: f64,
+        follow: bool,
+        out: &mut Vec<Vector3<f64>>,
+    ) {
         out.clear();
         let extrapolate = self.dt == dt && self.prev_dt == dt;
         let (mut k, mut m) = (0, 0);
@@ -56,9 +65,30 @@ impl ForceHistory {
             out.push(match (last, before) {
                 (Some(f1), Some(f0)) if extrapolate => 2.0 * f1 - f0,
                 (Some(f1), _) => f1,
+                _ if follow => self.followed(pair_ids, *id),
                 _ => Vector3::zeros(),
             });
         }
+    }
+
+    /// The last force of the first neighbour of pair `(i, j)` (segments
+    /// `i - 1 ... i + 1` by `j - 1 ... j + 1`) that was a contact at the last
+    /// solve and is not among `pair_ids`; zero if none.
+    fn followed(&self, pair_ids: &[(usize, usize)], (i, j): (usize, usize)) -> Vector3<f64> {
+        for di in -1..=1 {
+            for dj in -1..=1 {
+                let (Some(a), Some(b)) = (i.checked_add_signed(di), j.checked_add_signed(dj)) else {
+                    continue;
+                };
+                if (di, dj) == (0, 0) || pair_ids.binary_search(&(a, b)).is_ok() {
+                    continue;
+                }
+                if let Ok(k) = self.ids.binary_search(&(a, b)) {
+                    return self.forces[k];
+                }
+            }
+        }
+        Vector3::zeros()
     }
 
     /// Records a solve's forces: the last solve becomes the one before.

@@ -150,6 +150,7 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
             max_sweeps: params.contact_geometry.max_sweeps(),
+            relaxation: params.contact_geometry.relaxation(),
             ..defaults.solver
         },
         ..defaults

@@ -100,14 +100,14 @@ enum Fate {
 }
 
 /// One [`Merge::run`]'s inputs.
-struct Candidates<'a> {
+struct MergeInput<'a> {
     pairs: &'a [CandidatePair],
     curves: &'a [CurvePair],
     segments: &'a [Segment],
     fraction: f64,
 }
 
-impl Candidates<'_> {
+impl MergeInput<'_> {
     /// Segment `i`'s neighbour `d` along its rod, if any.
     #[inline]
     fn step(&self, i: usize, d: isize) -> Option<usize> {
@@ -148,7 +148,7 @@ impl Merge {
         }
         self.fate.clear();
         self.fate.resize(pairs.len(), Fate::Open);
-        let candidates = Candidates {
+        let input = MergeInput {
             pairs,
             curves,
             segments,
@@ -156,7 +156,7 @@ impl Merge {
         };
         for k in 0..pairs.len() {
             if self.rank[k].is_some() {
-                self.decide(&candidates, k);
+                self.decide(&input, k);
             }
         }
     }
@@ -164,7 +164,7 @@ impl Merge {
     /// Whether pair `k` (taking part) stays: unless a nearer neighbour pair
     /// that stays has its points within reach of `k`'s. Each pair is decided
     /// once; the recursion descends to nearer pairs only.
-    fn decide(&mut self, c: &Candidates, k: usize) -> bool {
+    fn decide(&mut self, c: &MergeInput, k: usize) -> bool {
         match self.fate[k] {
             Fate::Kept => return true,
             Fate::Dropped => return false,
@@ -233,6 +233,8 @@ mod tests {
     use super::*;
     use crate::contact::broad_phase::{brute_force, polyline_segments};
     use crate::contact::curve::{Piece, closest_points_on_pieces};
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
 
     /// Candidate pairs of rods `a` and `b` (radius `r`) within `margin` and
     /// their curves' closest points.
@@ -301,6 +303,93 @@ mod tests {
         assert!(xs.len() < pairs.len());
         assert!(xs[0] <= 0.37 * edge + 1.0 && *xs.last().unwrap() >= 19.0);
         assert!(xs.windows(2).all(|w| w[1] - w[0] <= edge), "kept points {xs:?}");
+    }
+
+    /// Merging as defined: pairs taken nearest first, each kept unless an
+    /// adjacent pair already kept has its points within `fraction` of this
+    /// pair's segments on both curves; a sort and a quadratic scan.
+    fn merged_in_order(
+        pairs: &[CandidatePair],
+        curves: &[CurvePair],
+        segments: &[Segment],
+        margin: f64,
+    ) -> Vec<bool> {
+        let fraction = 0.25;
+        let takes_part = |k: usize| {
+            curves[k].distance < segments[pairs[k].i].radius + segments[pairs[k].j].radius + margin
+        };
+        let mut order: Vec<usize> = (0..pairs.len()).filter(|&k| takes_part(k)).collect();
+        order.sort_by(|&k, &m| curves[k].distance.total_cmp(&curves[m].distance).then(k.cmp(&m)));
+        let length = |i: usize| (segments[i].b - segments[i].a).norm();
+        let neighbours = |i: usize, n: usize| {
+            segments[i].body == segments[n].body && segments[i].index.abs_diff(segments[n].index) <= 1
+        };
+        let mut keep = vec![false; pairs.len()];
+        for &k in &order {
+            let p = &pairs[k];
+            let duplicate = (0..pairs.len()).any(|m| {
+                let q = &pairs[m];
+                let (qa, qb, swapped) = if neighbours(p.i, q.i) && neighbours(p.j, q.j) {
+                    (q.i, q.j, false)
+                } else if neighbours(p.i, q.j) && neighbours(p.j, q.i) {
+                    (q.j, q.i, true)
+                } else {
+                    return false;
+                };
+                let (ma, mb) = if swapped {
+                    (curves[m].point_b, curves[m].point_a)
+                } else {
+                    (curves[m].point_a, curves[m].point_b)
+                };
+                m != k
+                    && (qa, qb) != (p.i, p.j)
+                    && keep[m]
+                    && (ma - curves[k].point_a).norm() <= fraction * length(p.i)
+                    && (mb - curves[k].point_b).norm() <= fraction * length(p.j)
+            });
+            keep[k] = !duplicate;
+        }
+        keep
+    }
+
+    /// Wavy strands lying along each other and crossing: [`Merge`], which
+    /// decides each pair after its nearer neighbours without sorting, keeps
+    /// exactly the pairs that merging in order of distance keeps.
+    #[test]
+    fn merging_without_a_sort_keeps_what_merging_in_order_keeps() {
+        let mut rng = StdRng::seed_from_u64(7);
+        let r = 0.5;
+        let mut dropped = 0;
+        for case in 0..40 {
+            let wavy = |y: f64, z: f64, rng: &mut StdRng| -> Vec<Vector3<f64>> {
+                let (amplitude, phase) = (rng.gen_range(0.0..0.3), rng.gen_range(0.0..6.0));
+                (0..25)
+                    .map(|i| {
+                        let x = i as f64 * rng.gen_range(0.9..1.1);
+                        Vector3::new(x, y + amplitude * (0.7 * x + phase).sin(), z)
+                    })
+                    .collect()
+            };
+            let a = wavy(0.0, 0.0, &mut rng);
+            let b = if case % 4 == 3 {
+                line(Vector3::new(10.0, -6.0, 2.0 * r), Vector3::new(0.1, 1.0, 0.0), 13)
+            } else {
+                wavy(2.0 * r + rng.gen_range(-0.05..0.05), 0.0, &mut rng)
+            };
+            let margin = 0.25 * r;
+            let (segments, pairs, curves) = candidates([&a, &b], r, margin);
+            let mut merge = Merge::default();
+            merge.run(&pairs, &curves, &segments, 0.25, margin);
+            let expected = merged_in_order(&pairs, &curves, &segments, margin);
+            for (k, &e) in expected.iter().enumerate() {
+                assert_eq!(merge.keep(k), e, "case {case}, pair {k}");
+            }
+            dropped += expected.iter().zip(&pairs).filter(|(e, _)| !**e).count();
+        }
+        assert!(
+            dropped > 100,
+            "the cases exercise merging ({dropped} pairs dropped)"
+        );
     }
 
     /// Two strands crossing at right angles meet at one point: of the

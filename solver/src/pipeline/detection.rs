@@ -174,17 +174,36 @@ impl World {
             return;
         };
         let mu = self.contact.friction;
+        let smooth = self.contact.geometry == Geometry::Smooth;
+        let axis = cylinder.axis_piece();
+        let mut pieces = std::mem::take(&mut self.pieces);
         for (k, s) in self.segments.iter().enumerate() {
-            let first = self.bodies[s.body].first_node + s.index;
-            let Some(mut c) = cylinder.contact([first, first + 1], (&s.a, &s.b), s.radius, margin, mu) else {
+            let body = &self.bodies[s.body];
+            let (found, start, tangent) = if smooth {
+                // The piece strays from its chord by at most its bound.
+                let chord = cylinder.closest(&s.a, &s.b);
+                if chord.distance >= cylinder.radius + s.radius + margin + self.deviations[k] {
+                    continue;
+                }
+                let built = pieces.get(&self.rods, &self.segments, k);
+                let piece = &pieces.pieces[built];
+                let closest = closest_points_from(piece, &axis, (chord.s, chord.t));
+                let found = cylinder.curve_contact(piece, body.first_node, &closest, s.radius, margin, mu);
+                (found, (closest.s, closest.t), piece.tangent(closest.s))
+            } else {
+                let first = body.first_node + s.index;
+                let found = cylinder.contact([first, first + 1], (&s.a, &s.b), s.radius, margin, mu);
+                (found, (0.0, 0.0), (s.b - s.a).normalize())
+            };
+            let Some(mut c) = found else {
                 continue;
             };
             if c.gap < 0.0 {
                 c.gap *= self.contact.penetration_recovery;
             }
             if self.contact.rolling {
-                let edge = self.bodies[s.body].first_edge + s.index;
-                let lever = -s.radius * (s.b - s.a).normalize().cross(&c.normal);
+                let edge = body.first_edge + s.index;
+                let lever = -s.radius * tangent.cross(&c.normal);
                 c.spin = [(edge, lever), (edge, Vector3::zeros())];
             }
             if self.contact.friction_law == FrictionLaw::SlidingDirection {
@@ -195,8 +214,9 @@ impl World {
             }
             self.contacts.push(c);
             self.pair_ids.push((OBSTACLE, k));
-            self.starts.push((0.0, 0.0));
+            self.starts.push(start);
         }
+        self.pieces = pieces;
     }
 
     /// Largest penetration over the detected pairs at the current positions.
@@ -231,11 +251,26 @@ impl World {
         ends: &mut Pieces,
     ) -> f64 {
         if i == OBSTACLE {
+            let Some(cylinder) = self.obstacle else {
+                return f64::NEG_INFINITY;
+            };
             let s = &self.segments[j];
             let rod = &self.rods[s.body];
-            return self.obstacle.map_or(f64::NEG_INFINITY, |c| {
-                c.penetration(&rod.node(s.index), &rod.node(s.index + 1), s.radius)
-            });
+            return match self.contact.geometry {
+                Geometry::Smooth => {
+                    let built = ends.get(&self.rods, &self.segments, j);
+                    let piece = &ends.pieces[built];
+                    let axis = cylinder.axis_piece();
+                    let d = match start {
+                        Some(start) => closest_points_from(piece, &axis, start).distance,
+                        None => closest_points_on_pieces(piece, &axis).distance,
+                    };
+                    cylinder.radius + s.radius - d
+                }
+                Geometry::Segment => {
+                    cylinder.penetration(&rod.node(s.index), &rod.node(s.index + 1), s.radius)
+                }
+            };
         }
         let (sa, sb) = (&self.segments[i], &self.segments[j]);
         let distance = match self.contact.geometry {

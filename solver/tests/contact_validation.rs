@@ -52,18 +52,24 @@ fn capstan_tension_ratio_is_exp_mu_phi() {
     assert_case("capstan");
 }
 
-/// The capstan with the smooth contact geometry: exp(mu phi) to the
-/// validation's tolerance (`CAPSTAN_PER_MU_PHI`) under the explicit solve, the
-/// rope's contact points held where their flat valleys start
-/// (docs/FIDELITY.md, "The smooth geometry on the capstan").
+/// The capstan with the smooth contact geometry, on a fixed rod and on the
+/// rigid cylinder (a hitch's pole): exp(mu phi) to the validation's
+/// tolerance (`CAPSTAN_PER_MU_PHI`) under the explicit solve, the rope's
+/// contact points held where their flat valleys start (docs/FIDELITY.md,
+/// "The smooth geometry on the capstan").
 #[test]
 fn smooth_capstan_tension_ratio_is_exp_mu_phi() {
     use solver::contact::{ContactSolve, FrictionLaw, Geometry};
     use solver::validation::contact::{Drum, capstan_on};
-    for (mu, turns) in [(0.1, 0.5), (0.3, 1.0)] {
+    for (drum, mu, turns) in [
+        (Drum::FixedRod, 0.1, 0.5),
+        (Drum::FixedRod, 0.3, 1.0),
+        (Drum::Cylinder, 0.1, 0.5),
+        (Drum::Cylinder, 0.3, 1.0),
+    ] {
         let phi = turns * std::f64::consts::TAU;
         let (ratio, expected) = capstan_on(
-            Drum::FixedRod,
+            drum,
             mu,
             phi,
             FrictionLaw::Isotropic,
@@ -71,7 +77,9 @@ fn smooth_capstan_tension_ratio_is_exp_mu_phi() {
             Geometry::Smooth,
         )
         .unwrap();
-        println!("smooth capstan mu {mu}, {turns} turns: ratio {ratio:.3}, exp(mu phi) {expected:.3}");
+        println!(
+            "smooth capstan on {drum:?}, mu {mu}, {turns} turns: ratio {ratio:.3}, exp(mu phi) {expected:.3}"
+        );
         assert!(
             (ratio / expected - 1.0).abs() <= solver::validation::CAPSTAN_PER_MU_PHI * mu * phi,
             "ratio {ratio} vs {expected}"

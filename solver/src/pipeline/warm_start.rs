@@ -103,3 +103,28 @@ impl ForceHistory {
         self.dt = dt;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A contact that slid from pair (3, 10) to (4, 11) starts from (3, 10)'s
+    /// force when it follows, from zero when it does not, and a pair whose
+    /// neighbour is still a contact does not take that neighbour's force.
+    #[test]
+    fn a_new_pair_follows_the_neighbour_that_left() {
+        let (f, g) = (Vector3::new(1.0, 2.0, 3.0), Vector3::new(-4.0, 0.5, 0.0));
+        let mut history = ForceHistory::default();
+        history.push(&[(3, 10), (20, 40)], &[f, g], 1e-3);
+        let mut out = Vec::new();
+        history.warm_start(&[(4, 11), (20, 40)], 1e-3, true, &mut out);
+        assert_eq!(out, [f, g]);
+        history.warm_start(&[(4, 11), (20, 40)], 1e-3, false, &mut out);
+        assert_eq!(out, [Vector3::zeros(), g]);
+        history.warm_start(&[(3, 10), (4, 11)], 1e-3, true, &mut out);
+        assert_eq!(out, [f, Vector3::zeros()]);
+        // Two apart is no neighbour.
+        history.warm_start(&[(5, 12)], 1e-3, true, &mut out);
+        assert_eq!(out, [Vector3::zeros()]);
+    }
+}

@@ -460,9 +460,7 @@ pub(super) fn validate(
             return Err(ContactError::InvalidContact(c));
         }
         let (nodes, weights) = contact.stencil();
-        if nodes.iter().fold(0, |m, &k| m.max(k)) >= inv_mass.len()
-            && let Some(&node) = nodes.iter().find(|&&k| k >= inv_mass.len())
-        {
+        if let Some(&node) = nodes.iter().find(|&&k| k >= inv_mass.len()) {
             return Err(ContactError::NodeOutOfRange {
                 contact: c,
                 node,

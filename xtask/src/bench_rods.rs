@@ -462,7 +462,6 @@ pub fn run(args: Args) -> Result<String> {
                 let k = solver::case::default_nodes(
                     flag("--length", 1.0),
                     flag("--h", 1.6e-3),
-                    flag("--mu", solver::case::CaseParams::default().mu),
                     solver::case::MAX_NODES,
                 );
                 r.flags.extend(["--nodes".to_string(), k.to_string()]);

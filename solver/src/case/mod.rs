@@ -18,7 +18,7 @@ pub use materials::{MATERIALS, NamedMaterial, material};
 pub use params::{CaseParams, PARAMETERS};
 pub use partial::{from_partial, param_names, partial_errors, type_error};
 pub use scales::{
-    EDGE_RADII, REFERENCE_DT, REFERENCE_EDGE, REFERENCE_RADIUS, SLIDING_MU, Scales, default_nodes, pull_rate,
+    EDGE_RADII, REFERENCE_DT, REFERENCE_EDGE, REFERENCE_RADIUS, Scales, default_nodes, pull_rate,
     reference_pull_rate,
 };
 use serde::{Deserialize, Serialize};
@@ -29,7 +29,7 @@ pub use table::{Bound, Group, Parameter, Range};
 /// defaults changes results, and part of every case's cache key, so that
 /// results computed under older physics are never served as current. What
 /// each revision changed, and why, is in CHANGELOG.md.
-pub const PHYSICS_REVISION: u32 = 16;
+pub const PHYSICS_REVISION: u32 = 17;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -310,13 +310,12 @@ impl CaseParams {
 
     /// The node count K: `nodes` if given, else the points of
     /// `initial_shape`, else [`default_nodes`] (edges of at most
-    /// [`EDGE_RADII`] h, at least the paper's 301; half of that below
-    /// [`SLIDING_MU`]).
+    /// [`EDGE_RADII`] h, at least the paper's 301).
     pub fn node_count(&self) -> usize {
         match (self.nodes, &self.initial_shape) {
             (Some(k), _) => k,
             (None, Some(shape)) => shape.nodes(),
-            (None, None) => default_nodes(self.length, self.h, self.mu, MAX_NODES),
+            (None, None) => default_nodes(self.length, self.h, MAX_NODES),
         }
     }
 

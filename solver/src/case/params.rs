@@ -301,7 +301,7 @@ pub const PARAMETERS: &[Parameter] = &[
         name: "contact_geometry",
         group: Group::Solver,
         unit: "",
-        default: "\"segment\"",
+        default: "\"smooth\"",
         range: Range::Words(&["segment", "smooth"]),
         null: None,
         paper: "\"segment\"",
@@ -361,8 +361,7 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::Integers(51, MAX_NODES as u64),
         null: Some(
             "edges of at most 2.08 h (the paper's L = 1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most \
-             4001; below mu = 0.05, edges of at most 1.04 h, at least 601 nodes; with initial_shape, its point \
-             count",
+             4001; with initial_shape, its point count",
         ),
         paper: "301",
         doc: "Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the \

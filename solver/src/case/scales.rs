@@ -19,8 +19,7 @@
 //! - The slenderness L/h. The knot's lengths scale with h
 //!   ([`crate::knot::KNOT_RADII`]), so edges of [`EDGE_RADII`] h resolve it
 //!   as the paper's K = 301 resolves its rod, and the default node count grows
-//!   with L/h ([`default_nodes`]; twice as fine where friction is nearly
-//!   absent, [`SLIDING_MU`]). The time step keeps the ratio of the rod's
+//!   with L/h ([`default_nodes`]). The time step keeps the ratio of the rod's
 //!   bending stiffness at the edge scale to the contact's inertial stiffness
 //!   m / dt^2 (Sec. 3.2, eq. 10) at the paper's (`CaseParams::time_step`), so
 //!   that it is proportional to h: the pull, also proportional to h, takes the
@@ -63,24 +62,15 @@ pub fn reference_pull_rate() -> f64 {
     pull_rate(REFERENCE_PULL_SPEED, REFERENCE_YOUNGS_MODULUS, REFERENCE_DENSITY)
 }
 
-/// Friction below which strands slide nearly freely and the default edges
-/// halve. Strands sliding along each other's polylines ride over bumps of
-/// about kappa l_e^2 / 8 (a quarter of a radius in the paper's braid at
-/// K = 301) and lose energy in small snaps: a friction of about 1e-3 in mu at
-/// the default edges, an eighth of it at half their length (docs/FIDELITY.md,
-/// "Reversibility without friction"). Above this mu it is at most 2 % of the
-/// friction's own loss.
-pub const SLIDING_MU: f64 = 0.05;
-
-/// The default node count for a rod of `length` and radius `h` with friction
-/// `mu`: edges of at most [`EDGE_RADII`] h and at least the paper's 301 nodes
-/// (below [`SLIDING_MU`], edges of half that and at least 601 nodes), at most
-/// `max`.
-pub fn default_nodes(length: f64, h: f64, mu: f64, max: usize) -> usize {
-    let refine = if mu < SLIDING_MU { 2 } else { 1 };
-    let edge = EDGE_RADII * h / refine as f64;
-    let edges = (length / edge * (1.0 - 1e-12)).ceil() as usize;
-    (edges + 1).clamp(refine * (REFERENCE_NODES - 1) + 1, max)
+/// The default node count for a rod of `length` and radius `h`: edges of
+/// at most [`EDGE_RADII`] h and at least the paper's 301 nodes, at most
+/// `max`. One rule for every friction: strands slide along each other's
+/// smooth centre lines without the polyline's bumps, so the frictionless
+/// knot is reversible at the paper's K (docs/FIDELITY.md, "Reversibility
+/// without friction").
+pub fn default_nodes(length: f64, h: f64, max: usize) -> usize {
+    let edges = (length / (EDGE_RADII * h) * (1.0 - 1e-12)).ceil() as usize;
+    (edges + 1).clamp(REFERENCE_NODES, max)
 }
 
 /// The inertia and time unit a case is computed with.
@@ -160,14 +150,10 @@ mod tests {
                 pull_rate_ratio: 1.0,
             }
         );
-        assert_eq!(default_nodes(1.0, 1.6e-3, 0.1, 4001), 301);
-        assert_eq!(default_nodes(1.0, 3.4e-3, 0.1, 4001), 301);
-        assert_eq!(default_nodes(1.0, 4e-4, 0.1, 4001), 1201);
-        assert_eq!(default_nodes(1.0, 1e-4, 0.1, 4001), 4001);
-        assert_eq!(default_nodes(1.0, 1.6e-3, 0.0, 4001), 601);
-        assert_eq!(default_nodes(1.0, 3.4e-3, 0.01, 4001), 601);
-        assert_eq!(default_nodes(1.0, 4e-4, 0.0, 4001), 2401);
-        assert_eq!(default_nodes(1.0, 1.6e-3, SLIDING_MU, 4001), 301);
+        assert_eq!(default_nodes(1.0, 1.6e-3, 4001), 301);
+        assert_eq!(default_nodes(1.0, 3.4e-3, 4001), 301);
+        assert_eq!(default_nodes(1.0, 4e-4, 4001), 1201);
+        assert_eq!(default_nodes(1.0, 1e-4, 4001), 4001);
     }
 
     /// By default every rod is pulled at the paper's rate: the same

@@ -66,28 +66,33 @@ pub enum Geometry {
     /// contact points and the forces' weights on the nodes vary smoothly as
     /// one rod slides along another, so a pull meets no washboard at the
     /// edges' scale.
+    #[default]
     Smooth,
     /// The paper's: closest points of the straight segments between the
     /// nodes (the polyline). As a node slides past a contact the normal and
     /// the gap kink and the chords' sag (`l^2 / (8 R)` on a bend of radius
     /// `R`) comes and goes, so force curves carry a sawtooth of one edge's
     /// period (docs/FIDELITY.md).
-    #[default]
     Segment,
 }
 
 impl Geometry {
-    /// The contact solve's sweep cap ([`GaussSeidelOptions::max_sweeps`]).
-    /// The smooth rows' twelve-node stencils overlap along a line contact,
-    /// whose nearly singular modes keep Gauss-Seidel from reaching 1e-6 in
-    /// hundreds of sweeps. The warm start carries each solve on from the
-    /// last step's forces, and n = 3's inversion, ripple and penetration do
-    /// not move with the cap beyond what round-off alone moves them (12 to
-    /// 200 sweeps: docs/FIDELITY.md, "The smooth solve's cap").
-    pub fn max_sweeps(self) -> usize {
-        match self {
-            Geometry::Segment => 200,
-            Geometry::Smooth => 12,
+    /// The sweep cap ([`GaussSeidelOptions::max_sweeps`]) of the contact
+    /// `solve`. The smooth rows' twelve-node stencils overlap along a line
+    /// contact, whose nearly singular modes keep the explicit Gauss-Seidel
+    /// from reaching 1e-6 in hundreds of sweeps. The warm start carries each
+    /// solve on from the last step's forces, and n = 3's inversion, ripple
+    /// and penetration do not move with the cap beyond what round-off alone
+    /// moves them (12 to 200 sweeps: docs/FIDELITY.md, "The smooth solve's
+    /// cap"). The implicit solve's rows couple every contact through the
+    /// rods' Newton matrices and need their sweeps: capped at 12 a sticking
+    /// contact slips 1.5e-3 of a free slide and the capstan's ratio falls
+    /// 21 % short at mu phi = 0.6 pi; its cost is in building the Delassus
+    /// operator, not in the sweeps.
+    pub fn max_sweeps(self, solve: ContactSolve) -> usize {
+        match (self, solve) {
+            (Geometry::Smooth, ContactSolve::Explicit) => 12,
+            _ => 200,
         }
     }
 
@@ -124,7 +129,7 @@ pub struct GaussSeidelOptions {
     /// [`Geometry::relaxation`] in a case.
     pub relaxation: f64,
     /// Stop when the largest force change over a sweep, or the natural-map
-    /// residual of [`SolveReport::residual`] (checked every 8 sweeps), is at
+    /// residual ([`super::gauss_seidel::GaussSeidel::residual`], checked every 8 sweeps), is at
     /// most `tolerance` times the largest contact force.
     pub tolerance: f64,
     /// `true`: the free normal velocity gets `gap / dt`, so positive gaps may
@@ -189,6 +194,24 @@ impl Default for ContactOptions {
             solve: ContactSolve::default(),
             candidates: Candidates::default(),
             geometry: Geometry::default(),
+        }
+        .with_geometry(Geometry::default())
+    }
+}
+
+impl ContactOptions {
+    /// These options with contacts between `geometry`'s centre lines, solved
+    /// with its sweep cap for [`ContactOptions::solve`] and its relaxation
+    /// ([`Geometry::max_sweeps`], [`Geometry::relaxation`]).
+    pub fn with_geometry(self, geometry: Geometry) -> Self {
+        Self {
+            geometry,
+            solver: GaussSeidelOptions {
+                max_sweeps: geometry.max_sweeps(self.solve),
+                relaxation: geometry.relaxation(),
+                ..self.solver
+            },
+            ..self
         }
     }
 }

@@ -146,15 +146,13 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         rolling: params.rolling,
         solve: params.contact_solve,
         candidates: params.contact_candidates,
-        geometry: params.contact_geometry,
         solver: GaussSeidelOptions {
             tolerance: params.contact_tolerance,
-            max_sweeps: params.contact_geometry.max_sweeps(),
-            relaxation: params.contact_geometry.relaxation(),
             ..defaults.solver
         },
         ..defaults
-    };
+    }
+    .with_geometry(params.contact_geometry);
     let env = Environment {
         gravity: Vector3::from(params.gravity) / scales.mass_scale,
         damping: RELAX_DAMPING / scales.time_unit,

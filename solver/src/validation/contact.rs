@@ -307,9 +307,9 @@ pub fn capstan_on(
         friction: mu,
         friction_law: law,
         solve,
-        geometry,
         ..ContactOptions::default()
-    };
+    }
+    .with_geometry(geometry);
     let mut world = match drum {
         Drum::FixedRod => World::new(vec![rope, cylinder], env, contact, NewtonOptions::default()),
         Drum::Cylinder => {
@@ -394,9 +394,9 @@ pub fn washboard(phi: f64, geometry: Geometry) -> Result<(f64, f64), WorldError>
     };
     let contact = ContactOptions {
         friction: 0.0,
-        geometry,
         ..ContactOptions::default()
-    };
+    }
+    .with_geometry(geometry);
     let mut world = World::new(vec![rope, bar], env, contact, NewtonOptions::default());
     let (dt, speed) = (2e-4, 0.01);
     // The load is ramped in and settles with the clamp still; then the clamp
@@ -433,18 +433,17 @@ pub fn washboard(phi: f64, geometry: Geometry) -> Result<(f64, f64), WorldError>
 
 /// A sticking contact under a stiff load path: a rod (10 cm, 20 nodes,
 /// h = 1 mm, E = 10 MPa) clamped at x = 0 lies across a fixed bar at its
-/// middle, pressed onto it by a load N = 0.1 N on the two nodes of the
-/// touching segment; its free end is pulled along the rod by a force ramped
-/// from 0 to T = mu N / 2 over 0.2 s and then held for 0.2 s (mu = 0.5,
-/// damped, dt = 1 ms), under the contact `geometry`. Coulomb: T is inside
-/// the cone, the contact sticks and friction carries all of T, so the rod's
-/// point in contact does not move along the rod and the clamped half stays
-/// unloaded. Returns (that point's final displacement along the rod, the
-/// displacement if the contact slid freely and the clamped half carried T:
-/// T (L / 2) / EA). The point in contact is the middle of the touching
-/// segment, on the smooth centre line under [`Geometry::Smooth`] (whose
-/// force reaches the six nodes around it, so the segment's own nodes move
-/// as the rod around the contact stretches).
+/// middle, pressed onto it by a load N = 0.1 N at the touching point (on
+/// the nodes as a contact force there: the touching segment's two nodes, or
+/// the smooth piece's six); its free end is pulled along the rod by a force
+/// ramped from 0 to T = mu N / 2 over 0.2 s and then held for 0.2 s
+/// (mu = 0.5, damped, dt = 1 ms), under the contact `geometry`. Coulomb: T
+/// is inside the cone, the contact sticks and friction carries all of T, so
+/// the rod's point in contact does not move along the rod and the clamped
+/// half stays unloaded. Returns (that point's final displacement along the
+/// rod, the displacement if the contact slid freely and the clamped half
+/// carried T: T (L / 2) / EA). The point in contact is the middle of the
+/// touching segment, on the smooth centre line under [`Geometry::Smooth`].
 pub fn sticking_contact_creep(solve: ContactSolve, geometry: Geometry) -> Result<(f64, f64), WorldError> {
     let (h, length, k) = (1e-3, 0.1, 20);
     let material = Material {
@@ -476,17 +475,26 @@ pub fn sticking_contact_creep(solve: ContactSolve, geometry: Geometry) -> Result
     let contact = ContactOptions {
         friction: mu,
         solve,
-        geometry,
         ..ContactOptions::default()
-    };
+    }
+    .with_geometry(geometry);
     let touching = |r: &Rod| match geometry {
         Geometry::Segment => 0.5 * (r.node(9) + r.node(10)),
         Geometry::Smooth => Piece::new(r.nodes(), 9, |i| r.node(i)).point(0.5),
     };
     let start = touching(&rod).x;
     let mut world = World::new(vec![rod, bar], env, contact, NewtonOptions::default());
-    for node in [9, 10] {
-        world.load_mut(0)[node_dof(node) + 2] = -0.5 * normal;
+    // The load presses at the touching point, spread over the nodes as a
+    // contact force there is.
+    let pressing: Vec<(usize, f64)> = match geometry {
+        Geometry::Segment => vec![(9, 0.5), (10, 0.5)],
+        Geometry::Smooth => {
+            let piece = Piece::new(world.rods[0].nodes(), 9, |i| world.rods[0].node(i));
+            piece.nodes.iter().copied().zip(piece.weights(0.5)).collect()
+        }
+    };
+    for (node, weight) in pressing {
+        world.load_mut(0)[node_dof(node) + 2] = -weight * normal;
     }
     let (dt, ramp, hold) = (1e-3, 200, 200);
     for step in 0..ramp + hold {

@@ -40,8 +40,9 @@ const WASHBOARD: f64 = 5e-3;
 const WASHBOARD_MEAN: f64 = 1e-3;
 /// The implicit solve's sticking contact: its Delassus operator is the
 /// Newton matrix of the contact-free step, a linearisation whose remainder
-/// (second order in the step's motion) lets it slip 4.5e-5 of a free slide.
-const IMPLICIT_CREEP: f64 = 2e-4;
+/// (second order in the step's motion) lets it slip about 4e-5 of a free
+/// slide (the segment and the smooth geometry alike).
+pub const IMPLICIT_CREEP: f64 = 2e-4;
 /// Second-order discretisation (DER's bending in the edge length l_e): at
 /// K = 101 the Euler load and the cantilevers' tips are at most about
 /// (l_e / L)^2 = 1e-4 off their continuum values (achieved 0.5-1.1e-4).

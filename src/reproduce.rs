@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use report::validation::{Job, PERTURBATION};
-use solver::case::{Candidates, CaseParams, FrictionLaw, Protocol};
+use solver::case::{Candidates, CaseParams, FrictionLaw, Geometry, Protocol};
 use solver::protocol::{self, CaseReport};
 use std::path::Path;
 use std::path::PathBuf;
@@ -139,8 +139,13 @@ fn jobs(figures: &Path) -> Result<Vec<Job>> {
             p.n = n;
             p.gravity = [0.0, 0.0, -9.81];
         }));
+        v.push(job(&key("segment"), |p| {
+            p.n = n;
+            p.contact_geometry = Geometry::Segment;
+        }));
         v.push(job(&key("paper"), |p| {
             p.n = n;
+            p.contact_geometry = Geometry::Segment;
             p.contact_candidates = Candidates::Predicted;
             p.dt = Some(1e-3);
             p.adaptive_dt = false;

@@ -454,7 +454,12 @@ fn sensitivity_section(get: &Lookup) -> Result<String> {
             "n4_gravity",
         ),
         variant(
-            "the paper's code's contact candidates and its constant 1 ms step",
+            "the paper's contact between straight segments (the default before revision 17)",
+            "n3_segment",
+            "n4_segment",
+        ),
+        variant(
+            "the paper's code's scheme: segment contact, its contact candidates and its constant 1 ms step",
             "n3_paper",
             "n4_paper",
         ),

@@ -305,14 +305,15 @@ pub const PARAMETERS: &[Parameter] = &[
         range: Range::Words(&["segment", "smooth"]),
         null: None,
         paper: "\"segment\"",
-        doc: "Which centre lines contacts are computed between: \"segment\" (the paper's: the straight segments \
-              between the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth of one \
-              edge's period in force curves) or \"smooth\" (C1 cubic curves through the nodes smoothed by an eighth \
-              towards their neighbours, half the chords' sag inside the nodes' circle: gap, normal and the forces' \
-              weights on the nodes vary smoothly as one rod slides along another; a rope pulled over a rod wavers by \
-              0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.89 % of F bar \
-              and its inversion to 133.0 (n = 4: 208.6), at 1.4 times the instructions: docs/FIDELITY.md, \"Contact \
-              geometry\").",
+        doc: "Which centre lines contacts are computed between: \"smooth\" (C1 cubic curves through the nodes \
+              smoothed by an eighth towards their neighbours, half the chords' sag inside the nodes' circle: gap, \
+              normal and the forces' weights on the nodes vary smoothly as one rod slides along another) or \
+              \"segment\" (the paper's, the default before revision 17: the straight segments between the \
+              nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth of one edge's period in \
+              force curves, and a frictionless knot lose 8 % of the clamps' work at the paper's K). A rope pulled \
+              over a rod wavers by 0.15 % of its normal force against 9 %; n = 3's sawtooth is 0.88 % of F bar \
+              against 8.1 %, its inversion 133.12 against 136.15, at 1.25 times the \
+              segments' instructions (docs/FIDELITY.md, \"Contact geometry\").",
         value: UNCHECKED,
     },
     Parameter {

@@ -185,7 +185,7 @@ def run(
     # Solver (advanced)
     contact_solve: Literal["explicit", "implicit"] = "explicit",
     contact_candidates: Literal["detected", "predicted"] = "detected",
-    contact_geometry: Literal["segment", "smooth"] = "segment",
+    contact_geometry: Literal["segment", "smooth"] = "smooth",
     nodes: int | None = None,
     mass_scaling: bool = True,
     dt: float | None = None,
@@ -333,19 +333,21 @@ def run(
           code's scheme: its inversions are in docs/VALIDATION.md ("Sensitivity"), beside the paper's code's
           in docs/FIDELITY.md. Range: "detected" or "predicted". Default: "detected". Paper: "predicted" (the
           code).
-      contact_geometry: Which centre lines contacts are computed between: "segment" (the paper's: the straight
-          segments between the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth
-          of one edge's period in force curves) or "smooth" (C1 cubic curves through the nodes smoothed by an
-          eighth towards their neighbours, half the chords' sag inside the nodes' circle: gap, normal and the
-          forces' weights on the nodes vary smoothly as one rod slides along another; a rope pulled over a rod
-          wavers by 0.15 % of its normal force instead of 9 %, n = 3's sawtooth falls from 8.1 % to 0.89 % of
-          F bar and its inversion to 133.0 (n = 4: 208.6), at 1.4 times the instructions: docs/FIDELITY.md,
-          "Contact geometry"). Range: "segment" or "smooth". Default: "segment". Paper: "segment".
+      contact_geometry: Which centre lines contacts are computed between: "smooth" (C1 cubic curves through
+          the nodes smoothed by an eighth towards their neighbours, half the chords' sag inside the nodes'
+          circle: gap, normal and the forces' weights on the nodes vary smoothly as one rod slides along
+          another) or "segment" (the paper's, the default before revision 17: the straight segments between
+          the nodes, whose kinks and sag make a sliding contact ride a washboard, a sawtooth of one edge's
+          period in force curves, and a frictionless knot lose 8 % of the clamps' work at the paper's K). A
+          rope pulled over a rod wavers by 0.15 % of its normal force against 9 %; n = 3's sawtooth is 0.88 %
+          of F bar against 8.1 %, its inversion 133.12 against 136.15, at 1.25 times the segments'
+          instructions (docs/FIDELITY.md, "Contact geometry"). Range: "segment" or "smooth". Default:
+          "smooth". Paper: "segment".
       nodes: Node count K. The knot builder needs edges of at most 4h; the default resolves every knot as the
           paper's rod is resolved (docs/FIDELITY.md, "Any rod": the convergence in K). The report's params
           give the K used. Range: null or integer in 51..=4001. null: edges of at most 2.08 h (the paper's L =
-          1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most 4001; below mu = 0.05, edges of at most 1.04
-          h, at least 601 nodes; with initial_shape, its point count. Default: null. Paper: 301.
+          1 m, h = 1.6 mm, K = 301), at least 301 nodes, at most 4001; with initial_shape, its point count.
+          Default: null. Paper: 301.
       mass_scaling: Compute a rod whose waves are faster than the paper's rod's, relative to pull_speed, with
           its inertia scaled up to the paper's pull rate pull_speed / sqrt(E / rho) (mass scaling; its weight
           stays physical): inversion is quasi-static, so its l_k bar does not depend on E or rho, and a steel
@@ -405,7 +407,7 @@ def validate(
     # Solver (advanced)
     contact_solve: Literal["explicit", "implicit"] = "explicit",
     contact_candidates: Literal["detected", "predicted"] = "detected",
-    contact_geometry: Literal["segment", "smooth"] = "segment",
+    contact_geometry: Literal["segment", "smooth"] = "smooth",
     nodes: int | None = None,
     mass_scaling: bool = True,
     dt: float | None = None,

@@ -37,6 +37,7 @@ pub fn tiny_base() -> Value {
 pub fn long_base() -> Value {
     json!({
         "protocol": "reference",
+        "contact_geometry": "segment",
         "h": 5e-3,
         "nodes": 121,
         "pull_speed": 0.001,

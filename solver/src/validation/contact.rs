@@ -478,22 +478,19 @@ pub fn sticking_contact_creep(solve: ContactSolve, geometry: Geometry) -> Result
         ..ContactOptions::default()
     }
     .with_geometry(geometry);
-    let touching = |r: &Rod| match geometry {
-        Geometry::Segment => 0.5 * (r.node(9) + r.node(10)),
-        Geometry::Smooth => Piece::new(r.nodes(), 9, |i| r.node(i)).point(0.5),
-    };
-    let start = touching(&rod).x;
-    let mut world = World::new(vec![rod, bar], env, contact, NewtonOptions::default());
-    // The load presses at the touching point, spread over the nodes as a
-    // contact force there is.
-    let pressing: Vec<(usize, f64)> = match geometry {
+    // The touching point's weights on the rod's nodes: the load presses
+    // there, spread over the nodes as a contact force there is.
+    let touching: Vec<(usize, f64)> = match geometry {
         Geometry::Segment => vec![(9, 0.5), (10, 0.5)],
         Geometry::Smooth => {
-            let piece = Piece::new(world.rods[0].nodes(), 9, |i| world.rods[0].node(i));
+            let piece = Piece::new(rod.nodes(), 9, |i| rod.node(i));
             piece.nodes.iter().copied().zip(piece.weights(0.5)).collect()
         }
     };
-    for (node, weight) in pressing {
+    let at = |r: &Rod| touching.iter().map(|&(i, w)| w * r.node(i).x).sum::<f64>();
+    let start = at(&rod);
+    let mut world = World::new(vec![rod, bar], env, contact, NewtonOptions::default());
+    for &(node, weight) in &touching {
         world.load_mut(0)[node_dof(node) + 2] = -weight * normal;
     }
     let (dt, ramp, hold) = (1e-3, 200, 200);
@@ -502,7 +499,7 @@ pub fn sticking_contact_creep(solve: ContactSolve, geometry: Geometry) -> Result
         world.load_mut(0)[node_dof(k - 1)] = scale * pull;
         world.step(dt)?;
     }
-    Ok((touching(&world.rods[0]).x - start, slide))
+    Ok((at(&world.rods[0]) - start, slide))
 }
 
 /// A free rod thrown at a fixed rod with `mu = 0` and no damping: returns

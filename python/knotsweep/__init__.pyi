@@ -246,11 +246,12 @@ def run(
           L/2] m. null: the knot builder's default. Default: null.
       initial_shape (m): Start from these points instead of the builder's knot: the polyline must be `length`
           long (within 1 %), every node between the ends along the line joining them (the clamps hold the
-          first and last points), no two non-neighbouring segments closer than 2h by more than 1 % (strands
-          pressed together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the
-          knot chosen (knot, n, braid_word). A bend's two rods: {"rods": [{"points": [...], "start": "pulled",
+          first and last points), no two non-neighbouring pieces of its centre line closer than 2h by more
+          than 1 % (strands pressed together, as in a relaxed snapshot a case wrote), measured on the centre
+          lines contact_geometry computes contacts between, and carry the Alexander polynomial of the knot
+          chosen (knot, n, braid_word). A bend's two rods: {"rods": [{"points": [...], "start": "pulled",
           "finish": "free"}, {...}]}, each rod `length` long with K points and one end pulled, the other free
-          (its tail), no two segments closer than 2h by more than 1 % (docs/API.md, "Start shapes"). Mind the
+          (its tail), no two pieces closer than 2h by more than 1 % (docs/API.md, "Start shapes"). Mind the
           request body limit (GET /api/limits). Range: null or K = nodes points [x, y, z], or {"rods": [...]}
           (a bend's two). null: the builder's knot. Default: null.
 

@@ -226,10 +226,9 @@ def test_a_snapshot_splits_per_rod():
 def test_a_bends_relaxed_snapshot_starts_a_case_again():
     """A tiny reef knot's relaxed snapshot, split per rod, is a start shape of
     two rods (standing ends pulled, tails free); one rod alone is refused,
-    naming the key. (On the segment contact: a smooth contact's relaxed strands may lie closer than the
-    start-shape check's 2h by their chords' sag, docs/FIDELITY.md, "Left open".)"""
-    tiny = dict(knot="reef", length=0.4, nodes=121, relax_time=0.1, pull_speed=0.01, min_l_k_bar=100.0,
-                contact_geometry="segment")
+    naming the key. Under the default smooth contact its strands' chords may
+    lie closer than 2h by their sag: the check measures the smooth curves."""
+    tiny = dict(knot="reef", length=0.4, nodes=121, relax_time=0.1, pull_speed=0.01, min_l_k_bar=100.0)
     r = knotsweep.run(**tiny)
     assert r.status == "completed", r.reason
     relaxed = next(s for s in r.snapshots if s.label == "relaxed")

@@ -370,6 +370,12 @@ pub struct InversionCriteria {
     /// value before the drop (the "rapid decrease" of F bar at the
     /// inversion, paper Fig. 5 a).
     pub force_drop: f64,
+    /// H bar falling only to this fraction is a snap when both the kinetic
+    /// energy and F bar confirm it and it falls no further below
+    /// `drop_fraction` ([`detect_fall`]): n = 2 under the reference pull
+    /// snaps with 93 times the kinetic energy and F bar 0.059 -> 0.042, its
+    /// loop keeping 0.63 of its height.
+    pub confirmed_drop_fraction: f64,
 }
 
 impl Default for InversionCriteria {
@@ -379,6 +385,7 @@ impl Default for InversionCriteria {
             window: 10.0,
             kinetic_energy_spike: 5.0,
             force_drop: 0.8,
+            confirmed_drop_fraction: 0.75,
         }
     }
 }
@@ -425,27 +432,58 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
 /// began by `kinetic_energy_spike`, or, reading H bar, when F bar falls
 /// within those samples to `force_drop` times its value before the drop
 /// (Fig. 5 a: F bar "rapidly decreases" at the inversion; a slow snap of
-/// rolling strands may stir little kinetic energy).
+/// rolling strands may stir little kinetic energy). Reading H bar, a
+/// shallower fall, to `confirmed_drop_fraction`, is a snap when both the
+/// kinetic energy and F bar confirm it and H bar stays above `drop_fraction`
+/// of that largest value for the [`ONSET_SAMPLES`] samples after it (a
+/// deeper fall there is read by the first rule, as before).
 pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Reading) -> Option<Inversion> {
-    for j in 1..series.len() {
+    (1..series.len()).find_map(|j| {
+        let fall = Fall::at(series, j, criteria, reading)?;
+        let level = reading.level(&series[j]);
+        let spiked = fall.ratio >= criteria.kinetic_energy_spike;
+        let deep = level <= criteria.drop_fraction * fall.reference && (spiked || fall.force_dropped);
+        let shallow_confirmed = reading == Reading::LoopHeight
+            && level <= criteria.confirmed_drop_fraction * fall.reference
+            && spiked
+            && fall.force_dropped
+            && series.get(j + ONSET_SAMPLES).is_some()
+            && series[j + 1..=j + ONSET_SAMPLES]
+                .iter()
+                .all(|s| reading.level(s) > criteria.drop_fraction * fall.reference);
+        (deep || shallow_confirmed).then(|| fall.inversion(series, j, reading))
+    })
+}
+
+/// A candidate fall at sample j ([`detect_fall`]): the window's largest
+/// value before it, the kinetic energy's peak over its median before the
+/// drop began, and F bar's least value in the samples from j on.
+struct Fall {
+    reference: f64,
+    ratio: f64,
+    f_after: f64,
+    force_dropped: bool,
+}
+
+impl Fall {
+    fn at(series: &[Sample], j: usize, criteria: &InversionCriteria, reading: Reading) -> Option<Self> {
         let drop = &series[j];
         // A drop is judged against a full window of history (the first
         // samples of a pull may still carry the relaxation's transients).
         if !reading.may_drop(drop) || series[0].l_k_bar - drop.l_k_bar < criteria.window {
-            continue;
+            return None;
         }
-        let Some((start, reference)) = series[..j]
+        let (start, reference) = series[..j]
             .iter()
             .enumerate()
             .rev()
             .take_while(|(_, s)| s.l_k_bar - drop.l_k_bar <= criteria.window)
             .map(|(i, s)| (i, reading.level(s)))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-        else {
-            continue;
-        };
-        if reference <= 0.0 || reading.level(drop) > criteria.drop_fraction * reference {
-            continue;
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if reference <= 0.0
+            || reading.level(drop) > criteria.drop_fraction.max(criteria.confirmed_drop_fraction) * reference
+        {
+            return None;
         }
         let before = &series[j - 1];
         let lo = start.saturating_sub(20);
@@ -460,7 +498,6 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
             .iter()
             .map(|s| s.kinetic_energy)
             .fold(0.0, f64::max);
-        let ratio = peak / median;
         let f_after = series[j..hi]
             .iter()
             .map(|s| s.f_bar)
@@ -468,26 +505,33 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
         let force_dropped = reading == Reading::LoopHeight
             && before.f_bar > 0.0
             && f_after <= criteria.force_drop * before.f_bar;
-        if ratio < criteria.kinetic_energy_spike && !force_dropped {
-            continue;
-        }
+        Some(Self {
+            reference,
+            ratio: peak / median,
+            f_after,
+            force_dropped,
+        })
+    }
+
+    /// The snap reported for this fall: the sample before it.
+    fn inversion(&self, series: &[Sample], j: usize, reading: Reading) -> Inversion {
+        let before = &series[j - 1];
         let (h_bar_before, h_bar_after) = match reading {
-            Reading::LoopHeight => (before.h_bar, drop.h_bar),
+            Reading::LoopHeight => (before.h_bar, series[j].h_bar),
             Reading::Force => (0.0, 0.0),
         };
-        return Some(Inversion {
+        Inversion {
             l_k_bar: before.l_k_bar,
             l_k_arc_bar: before.l_k_arc_bar,
             l_c_over_l: before.l_c_over_l,
             f_bar_before: before.f_bar,
-            f_bar_after: f_after,
+            f_bar_after: self.f_after,
             h_bar_before,
             h_bar_after,
-            kinetic_energy_ratio: ratio,
+            kinetic_energy_ratio: self.ratio,
             sample: j - 1,
-        });
+        }
     }
-    None
 }
 
 /// Samples before the drop within which a snap's onset is looked for: a snap
@@ -844,6 +888,41 @@ mod tests {
         let found = detect_inversion(&earlier, &criteria).expect("detected");
         assert_eq!(found.sample, 39);
         assert_eq!(snap_onset(&earlier, found, &criteria), found);
+    }
+
+    /// A loop that keeps 0.7 of its height through a snap (0.8 to 0.56, above
+    /// the 0.48 of `drop_fraction`) inverts when both the kinetic energy and
+    /// F bar confirm it; with either alone it does not, nor before the
+    /// samples after it are in; a deeper fall right after is read as before,
+    /// at the deeper sample.
+    #[test]
+    fn shallow_fall_confirmed_twice_is_an_inversion() {
+        let criteria = InversionCriteria::default();
+        let held: Vec<Sample> = (0..40)
+            .map(|k| sample(200.0 - k as f64, 0.8, 1e-9, 1.0))
+            .collect();
+        let snap = |ke: f64, f: f64, after: [f64; 3]| {
+            let mut s = held.clone();
+            s.push(sample(160.0, 0.56, ke, f));
+            for (k, h) in after.into_iter().enumerate() {
+                s.push(sample(159.0 - k as f64, h, 1e-9, f));
+            }
+            s
+        };
+        let both = snap(1e-6, 0.7, [0.57, 0.58, 0.58]);
+        let inv = detect_inversion(&both, &criteria).expect("detected");
+        assert_eq!((inv.l_k_bar, inv.sample), (161.0, 39));
+        assert_eq!((inv.h_bar_before, inv.h_bar_after), (0.8, 0.56));
+        assert_eq!((inv.f_bar_before, inv.f_bar_after), (1.0, 0.7));
+        assert!(
+            detect_inversion(&both[..42], &criteria).is_none(),
+            "waits for the samples after"
+        );
+        assert!(detect_inversion(&snap(1e-9, 0.7, [0.57, 0.58, 0.58]), &criteria).is_none());
+        assert!(detect_inversion(&snap(1e-6, 0.9, [0.57, 0.58, 0.58]), &criteria).is_none());
+        let deeper = snap(1e-6, 0.7, [0.3, 0.3, 0.3]);
+        let inv = detect_inversion(&deeper, &criteria).expect("detected");
+        assert_eq!((inv.sample, inv.h_bar_after), (40, 0.3));
     }
 
     #[test]

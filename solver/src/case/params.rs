@@ -609,11 +609,12 @@ pub const PARAMETERS: &[Parameter] = &[
         paper: "",
         doc: "Start from these points instead of the builder's knot: the polyline must be `length` long (within \
               1 %), every node between the ends along the line joining them (the clamps hold the first and last \
-              points), no two non-neighbouring segments closer than 2h by more than 1 % (strands pressed \
-              together, as in a relaxed snapshot a case wrote), and carry the Alexander polynomial of the knot \
-              chosen (knot, n, braid_word). A bend's two rods: {\"rods\": [{\"points\": [...], \"start\": \
+              points), no two non-neighbouring pieces of its centre line closer than 2h by more than 1 % \
+              (strands pressed together, as in a relaxed snapshot a case wrote), measured on the centre lines \
+              contact_geometry computes contacts between, and carry the Alexander polynomial of the knot chosen \
+              (knot, n, braid_word). A bend's two rods: {\"rods\": [{\"points\": [...], \"start\": \
               \"pulled\", \"finish\": \"free\"}, {...}]}, each rod `length` long with K points and one end \
-              pulled, the other free (its tail), no two segments closer than 2h by more than 1 % (docs/API.md, \
+              pulled, the other free (its tail), no two pieces closer than 2h by more than 1 % (docs/API.md, \
               \"Start shapes\"). Mind the request body limit (GET /api/limits).",
         value: UNCHECKED,
     },
@@ -700,7 +701,11 @@ impl CaseParams {
                     knot.name()
                 ),
             }),
-            Some(shape) => shape.checked(&knot, (self.length, self.node_count(), self.h)),
+            Some(shape) => shape.checked(
+                &knot,
+                (self.length, self.node_count(), self.h),
+                self.contact_geometry,
+            ),
             None => knot.tie().map_err(|e| self.knot_error(e)),
         }
     }

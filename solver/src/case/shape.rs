@@ -17,6 +17,7 @@
 //! tails are, then free. A knot in one rod is pulled by both ends (a list
 //! of points is that rod); each rod of a bend by one.
 use super::FieldError;
+use crate::contact::Geometry;
 use crate::knot::{self, Clamp, Knot, StartShape};
 use crate::rod::End;
 use serde::{Deserialize, Deserializer, Serialize};
@@ -117,18 +118,26 @@ impl InitialShape {
     }
 
     /// The shape checked for `knot` with rods of (`length`, `nodes`, radius
-    /// `h`): a knot in one rod by [`knot::checked_start`]; a bend's two rods
-    /// each by [`knot::checked_rod`], one end of each pulled, and no two of
-    /// their segments closer than 2h by more than 1 %
+    /// `h`) and the contact `geometry`: a knot in one rod by
+    /// [`knot::checked_start`]; a bend's two rods each by
+    /// [`knot::checked_rod`], one end of each pulled, and no two of their
+    /// pieces closer than 2h by more than 1 % as `geometry` sees them
     /// ([`knot::check_rods_clearance`]). Its
     /// knot type is not checked: no invariant tells two open rods' tangles
     /// apart (the run reports whether they hold each other). An error names
     /// the field: `initial_shape`, or the rod or end within it
     /// (`initial_shape.rods[1].finish`).
-    pub fn checked(&self, knot: &Knot, rod: (f64, usize, f64)) -> Result<StartShape, FieldError> {
+    pub fn checked(
+        &self,
+        knot: &Knot,
+        rod: (f64, usize, f64),
+        geometry: Geometry,
+    ) -> Result<StartShape, FieldError> {
         let two = matches!(knot, Knot::Bend(_));
         let rods = match (self, two) {
-            (InitialShape::Points(points), false) => return one_rod(points, knot, rod, "initial_shape"),
+            (InitialShape::Points(points), false) => {
+                return one_rod(points, knot, rod, geometry, "initial_shape");
+            }
             (InitialShape::Points(_), true) => {
                 return Err(FieldError::new(
                     "initial_shape",
@@ -157,9 +166,9 @@ impl InitialShape {
                         ));
                     }
                 }
-                one_rod(&r.points, knot, rod, "initial_shape.rods[0].points")
+                one_rod(&r.points, knot, rod, geometry, "initial_shape.rods[0].points")
             }
-            (2, true) => bend(rods, rod).map_err(|(field, reason)| refuse(field, reason)),
+            (2, true) => bend(rods, rod, geometry).map_err(|(field, reason)| refuse(field, reason)),
             (count, _) => Err(refuse(
                 "rods".to_string(),
                 format!(
@@ -173,11 +182,12 @@ impl InitialShape {
 }
 
 /// A knot in one rod from its `points`, checked against its Alexander
-/// polynomial; errors naming `field`.
+/// polynomial and for clearance under `geometry`; errors naming `field`.
 fn one_rod(
     points: &[[f64; 3]],
     knot: &Knot,
     rod: (f64, usize, f64),
+    geometry: Geometry,
     field: &str,
 ) -> Result<StartShape, FieldError> {
     let Some(alexander) = knot.alexander() else {
@@ -189,15 +199,16 @@ fn one_rod(
             ),
         ));
     };
-    knot::checked_start(points, rod, &knot.name(), &alexander)
+    knot::checked_start(points, rod, geometry, &knot.name(), &alexander)
         .map_err(|reason| FieldError::new(field, reason))
 }
 
-/// A bend's two rods, each pulled by one end; an error is the field within
-/// `initial_shape` and the reason.
+/// A bend's two rods, each pulled by one end, clear of each other under
+/// `geometry`; an error is the field within `initial_shape` and the reason.
 fn bend(
     rods: &[ShapeRod],
     (length, nodes, radius): (f64, usize, f64),
+    geometry: Geometry,
 ) -> Result<StartShape, (String, String)> {
     let mut clamps = Vec::new();
     let mut centre_lines = Vec::new();
@@ -224,7 +235,7 @@ fn bend(
             knot::checked_rod(&rod.points, (length, nodes)).map_err(|e| (format!("rods[{r}].points"), e))?;
         centre_lines.push(points);
     }
-    knot::check_rods_clearance(&centre_lines, radius).map_err(|e| ("rods".to_string(), e))?;
+    knot::check_rods_clearance(&centre_lines, radius, geometry).map_err(|e| ("rods".to_string(), e))?;
     Ok(StartShape {
         rods: centre_lines,
         loop_middle: 0,

@@ -74,7 +74,11 @@ pub fn check_rods_clearance(
         .flat_map(|rod| rod.windows(2).map(|w| (w[1] - w[0]).norm()))
         .fold(f64::INFINITY, f64::min);
     match closest_surfaces(rods, radius, shortest, geometry) {
-        Some((d, (a, i), (b, j))) if d < 2.0 * radius * (1.0 - START_OVERLAP) => {
+        Some(Approach {
+            distance: d,
+            a: (a, i),
+            b: (b, j),
+        }) if d < 2.0 * radius * (1.0 - START_OVERLAP) => {
             let pieces = match rods.len() {
                 1 => format!("segments {i} and {j}"),
                 _ => format!("rod {a}'s segment {i} and rod {b}'s segment {j}"),
@@ -89,16 +93,19 @@ pub fn check_rods_clearance(
     }
 }
 
+/// Two pieces' closest approach: their centre lines' distance and each
+/// piece as (rod, segment index).
+struct Approach {
+    distance: f64,
+    a: (usize, usize),
+    b: (usize, usize),
+}
+
 /// The closest approach of the rods' centre lines (radius `h`, shortest
-/// edge `edge`) between non-neighbouring pieces as `geometry` computes it,
-/// with the two pieces (rod, segment index); `None` if none come within 2h
-/// of each other's chords plus the curves' largest deviation from them.
-fn closest_surfaces(
-    rods: &[Vec<Vector3<f64>>],
-    h: f64,
-    edge: f64,
-    geometry: Geometry,
-) -> Option<(f64, (usize, usize), (usize, usize))> {
+/// edge `edge`) between non-neighbouring pieces as `geometry` computes it;
+/// `None` if none come within 2h of each other's chords plus the curves'
+/// largest deviation from them.
+fn closest_surfaces(rods: &[Vec<Vector3<f64>>], h: f64, edge: f64, geometry: Geometry) -> Option<Approach> {
     let segments: Vec<_> = (rods.iter().enumerate())
         .flat_map(|(body, points)| polyline_segments(points, h, body))
         .collect();
@@ -124,9 +131,13 @@ fn closest_surfaces(
                     closest_points_from(&pa, &pb, (p.closest.s, p.closest.t)).distance
                 }
             };
-            (d, (a.body, a.index), (b.body, b.index))
+            Approach {
+                distance: d,
+                a: (a.body, a.index),
+                b: (b.body, b.index),
+            }
         })
-        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .min_by(|x, y| x.distance.total_cmp(&y.distance))
 }
 
 /// Every node lies between the two ends along the line joining them.

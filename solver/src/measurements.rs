@@ -376,6 +376,16 @@ pub struct InversionCriteria {
     /// snaps with 93 times the kinetic energy and F bar 0.059 -> 0.042, its
     /// loop keeping 0.63 of its height.
     pub confirmed_drop_fraction: f64,
+    /// Reading H bar, the knot's own length falling across the drop by more
+    /// than this (radii) beyond the clamps' travel stands for F bar's fall in
+    /// confirming a shallow fall: on a rod longer than its knot the tails'
+    /// elastic stretch pours into the knot as it snaps, so that F bar falls
+    /// by only the jump over the tails' compliance (rubber n = 2 at L/h 5000,
+    /// mu = 0.05: own length 70.2 -> 62.9 within one sample, F bar 0.042 ->
+    /// 0.038). On the paper's rod a jump this large releases a fifth of F
+    /// bar at 0.06 (EA / EI = 4 / h^2 over L/h 625), which F bar's own fall
+    /// confirms already.
+    pub knot_jump: f64,
 }
 
 impl Default for InversionCriteria {
@@ -386,6 +396,7 @@ impl Default for InversionCriteria {
             kinetic_energy_spike: 5.0,
             force_drop: 0.8,
             confirmed_drop_fraction: 0.75,
+            knot_jump: 2.0,
         }
     }
 }
@@ -434,7 +445,8 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
 /// (Fig. 5 a: F bar "rapidly decreases" at the inversion; a slow snap of
 /// rolling strands may stir little kinetic energy). Reading H bar, a
 /// shallower fall, to `confirmed_drop_fraction`, is a snap when both the
-/// kinetic energy and F bar confirm it and H bar stays above `drop_fraction`
+/// kinetic energy and F bar (or the knot's own length jumping by more than
+/// `knot_jump`) confirm it and H bar stays above `drop_fraction`
 /// of that largest value for the [`ONSET_SAMPLES`] samples after it (a
 /// deeper fall there is read by the first rule, as before).
 pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Reading) -> Option<Inversion> {
@@ -446,7 +458,7 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
         let shallow_confirmed = reading == Reading::LoopHeight
             && level <= criteria.confirmed_drop_fraction * fall.reference
             && spiked
-            && fall.force_dropped
+            && (fall.force_dropped || fall.knot_jump > criteria.knot_jump)
             && series.get(j + ONSET_SAMPLES).is_some()
             && series[j + 1..=j + ONSET_SAMPLES]
                 .iter()
@@ -457,12 +469,15 @@ pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Rea
 
 /// A candidate fall at sample j ([`detect_fall`]): the window's largest
 /// value before it, the kinetic energy's peak over its median before the
-/// drop began, and F bar's least value in the samples from j on.
+/// drop began, F bar's least value in the samples from j on, and how much
+/// further the knot's own length fell than the clamps moved from sample j - 1
+/// to j (radii).
 struct Fall {
     reference: f64,
     ratio: f64,
     f_after: f64,
     force_dropped: bool,
+    knot_jump: f64,
 }
 
 impl Fall {
@@ -510,6 +525,7 @@ impl Fall {
             ratio: peak / median,
             f_after,
             force_dropped,
+            knot_jump: (before.l_k_arc_bar - drop.l_k_arc_bar) - (before.l_k_bar - drop.l_k_bar),
         })
     }
 
@@ -923,6 +939,43 @@ mod tests {
         let deeper = snap(1e-6, 0.7, [0.3, 0.3, 0.3]);
         let inv = detect_inversion(&deeper, &criteria).expect("detected");
         assert_eq!((inv.sample, inv.h_bar_after), (40, 0.3));
+    }
+
+    /// A rod longer than its knot (rubber n = 2 at L/h 5000, mu = 0.05,
+    /// under the reference pull): H bar falls to 0.69 of the window's
+    /// largest with a kinetic energy burst, F bar only to 0.9 of its value,
+    /// the tails' stretch taken up by the knot, whose own length falls by
+    /// 7.35 where the clamps move 0.5. The jump confirms the fall as F bar's
+    /// would; a knot whose own length follows the clamps does not, nor does a
+    /// jump without the burst.
+    #[test]
+    fn a_shallow_fall_with_the_knot_jumping_is_an_inversion() {
+        let criteria = InversionCriteria::default();
+        let snap = |jump: f64, ke: f64| -> Vec<Sample> {
+            let mut s: Vec<Sample> = (0..40)
+                .map(|k| Sample {
+                    l_k_arc_bar: 250.0 - 0.8 * k as f64,
+                    ..sample(200.0 - k as f64, 0.3, 1e-9, 0.042)
+                })
+                .collect();
+            let before = s[39].l_k_arc_bar;
+            for (k, h) in [0.205, 0.2, 0.2, 0.2].into_iter().enumerate() {
+                s.push(Sample {
+                    l_k_arc_bar: before - 0.5 - jump - 0.4 * k as f64,
+                    ..sample(160.5 - 0.5 * k as f64, h, if k == 0 { ke } else { 1e-9 }, 0.038)
+                });
+            }
+            s
+        };
+        let inv = detect_inversion(&snap(6.85, 1e-7), &criteria).expect("detected");
+        assert_eq!((inv.sample, inv.l_k_bar), (39, 161.0));
+        assert_eq!((inv.h_bar_before, inv.h_bar_after), (0.3, 0.205));
+        assert!(inv.f_bar_after > criteria.force_drop * inv.f_bar_before);
+        assert!(detect_inversion(&snap(0.0, 1e-7), &criteria).is_none(), "no jump");
+        assert!(
+            detect_inversion(&snap(6.85, 1e-9), &criteria).is_none(),
+            "no burst"
+        );
     }
 
     #[test]

@@ -222,8 +222,9 @@ pub enum Outcome {
     Confirmed,
     /// Passed the fast pull's event by `FALSE_ALARM` without one.
     Refuted,
-    /// Its event came within `MIN_LEAD` of the restart, which was past the
-    /// fold: the stage goes back further.
+    /// Its event came within `MIN_LEAD` of the restart, or its knot jumped
+    /// there ([`knot_jumped`]), so that the restart was past the fold: the
+    /// stage goes back further.
     TooLate,
 }
 
@@ -274,6 +275,20 @@ impl Way {
     pub(super) fn along(self, start: f64, l: f64) -> f64 {
         if self.0 > 0.0 { start - l } else { l - start }
     }
+}
+
+/// Whether a knot whose own length was `from` and is `arc`, its clamps
+/// having moved `travelled` (l_k bar) along the stage since, jumped by more
+/// than `jump` (radii, `InversionCriteria::knot_jump`) beyond that travel
+/// within `MIN_LEAD` of it. A slow phase whose knot jumps so from its
+/// checkpoint, in its settle or right after, without an event the detector
+/// reads, went through the fold it restarted at (rubber n = 2 at L/h 5000,
+/// mu = 0.05: own length 71.1 -> 64.0 while settling with the clamps held)
+/// and is retried from further back, as a slow phase whose event comes
+/// within `MIN_LEAD` of its restart is. A slow pull tightens the knot by less
+/// than the clamps' travel (the tails' stretch grows with the force).
+pub(super) fn knot_jumped(way: Way, from: f64, arc: f64, travelled: f64, jump: f64) -> bool {
+    travelled < MIN_LEAD && way.along(from, arc) - travelled > jump
 }
 
 /// A snap the damped fast approach of a tightening smeared out: H bar has
@@ -454,6 +469,31 @@ mod tests {
         assert_eq!(tighten.restart_before(None), RESTART_BEFORE);
         assert_eq!(tighten.restart_before(Some(6)), 2.0 * RESTART_BEFORE);
         assert_eq!(loosen.restart_before(Some(6)), RELEASE_RESTART_BEFORE);
+    }
+
+    /// The rubber rod of L/h 5000, n = 2, mu = 0.05: restarted at the own
+    /// length 71.11 (l_k bar 18.58), it settled at 63.95 with its clamps
+    /// held, and a slow pull there tightens its knot by 0.1 to 0.3 a sample
+    /// of 0.5 in l_k bar. Only the jump is one; the same fall spread over
+    /// more than `MIN_LEAD` of travel is a pull, and a release never jumps
+    /// by loosening.
+    #[test]
+    fn a_knot_that_falls_through_its_fold_at_a_restart_jumped() {
+        let (tighten, jump) = (
+            Way(1.0),
+            crate::measurements::InversionCriteria::default().knot_jump,
+        );
+        let jumped = |way, from, arc, travelled| knot_jumped(way, from, arc, travelled, jump);
+        assert!(jumped(tighten, 71.11, 63.95, 0.0));
+        assert!(jumped(tighten, 71.11, 63.95, 0.5));
+        assert!(!jumped(tighten, 71.11, 70.81, 0.5));
+        assert!(
+            !jumped(tighten, 71.11, 69.3, 1.5),
+            "a fall of 1.8 over 1.5 of travel"
+        );
+        assert!(!jumped(tighten, 71.11, 63.95, MIN_LEAD));
+        assert!(jumped(Way(-1.0), 63.95, 71.11, 0.0));
+        assert!(!jumped(Way(-1.0), 71.11, 63.95, 0.0));
     }
 
     /// Checkpoints are found back along the stage, either way.

@@ -277,18 +277,31 @@ impl Way {
     }
 }
 
-/// Whether a knot whose own length was `from` and is `arc`, its clamps
-/// having moved `travelled` (l_k bar) along the stage since, jumped by more
-/// than `jump` (radii, `InversionCriteria::knot_jump`) beyond that travel
-/// within `MIN_LEAD` of it. A slow phase whose knot jumps so from its
-/// checkpoint, in its settle or right after, without an event the detector
-/// reads, went through the fold it restarted at (rubber n = 2 at L/h 5000,
-/// mu = 0.05: own length 71.1 -> 64.0 while settling with the clamps held)
-/// and is retried from further back, as a slow phase whose event comes
-/// within `MIN_LEAD` of its restart is. A slow pull tightens the knot by less
-/// than the clamps' travel (the tails' stretch grows with the force).
-pub(super) fn knot_jumped(way: Way, from: f64, arc: f64, travelled: f64, jump: f64) -> bool {
-    travelled < MIN_LEAD && way.along(from, arc) - travelled > jump
+/// A knot that jumps at a restart went through its fold when its loop's
+/// H bar falls with the jump to at most this fraction of its value at the
+/// checkpoint ([`knot_jumped`]). Measured at L/h 5000 and 2500: the snaps
+/// of n = 2 (rubber, mu = 0.05 and 0.5) and n = 5 (mu = 0.2) fell to 0.82,
+/// 0.73 and 0.64; the nylon line's knot at mu = 0.5 crept by 4.3 radii into
+/// its braid while settling with H bar at 0.97 of its value.
+const JUMP_LOOP_FALL: f64 = 0.9;
+
+/// Whether a tightening knot jumped from the sample `from` to `now`: within
+/// `MIN_LEAD` of the clamps' travel, its own length fell by more than `jump`
+/// (radii, `InversionCriteria::knot_jump`) beyond that travel, and its loop's
+/// H bar fell with it (`JUMP_LOOP_FALL`). A slow phase whose knot jumps so
+/// from its checkpoint, in its settle with the clamps held or right after,
+/// without an event the detector reads, went through the fold it restarted
+/// at (rubber n = 2 at L/h 5000, mu = 0.05: own length 71.1 -> 64.0 and H bar
+/// 0.239 -> 0.197 while settling) and is retried from further back, as a
+/// slow phase whose event comes within `MIN_LEAD` of its restart is. A slow
+/// pull tightens the knot by less than the clamps' travel (the tails'
+/// stretch grows with the force).
+pub(super) fn knot_jumped(way: Way, from: &Sample, now: &Sample, jump: f64) -> bool {
+    let travelled = way.along(from.l_k_bar, now.l_k_bar);
+    way.0 > 0.0
+        && travelled < MIN_LEAD
+        && way.along(from.l_k_arc_bar, now.l_k_arc_bar) - travelled > jump
+        && now.h_bar <= JUMP_LOOP_FALL * from.h_bar
 }
 
 /// A snap the damped fast approach of a tightening smeared out: H bar has
@@ -472,28 +485,46 @@ mod tests {
     }
 
     /// The rubber rod of L/h 5000, n = 2, mu = 0.05: restarted at the own
-    /// length 71.11 (l_k bar 18.58), it settled at 63.95 with its clamps
-    /// held, and a slow pull there tightens its knot by 0.1 to 0.3 a sample
-    /// of 0.5 in l_k bar. Only the jump is one; the same fall spread over
-    /// more than `MIN_LEAD` of travel is a pull, and a release never jumps
-    /// by loosening.
+    /// length 71.11 (l_k bar 18.58, H bar 0.239), it settled at 63.95 (H bar
+    /// 0.197) with its clamps held, and a slow pull there tightens its knot
+    /// by 0.1 to 0.3 a sample of 0.5 in l_k bar. Only the jump is one; the
+    /// same fall spread over `MIN_LEAD` of travel is a pull, a knot creeping
+    /// into its braid with its loop unchanged (the nylon line at mu = 0.5:
+    /// 86.94 -> 82.11, H bar 0.278 -> 0.271) is none, nor is a release.
     #[test]
     fn a_knot_that_falls_through_its_fold_at_a_restart_jumped() {
+        let at = |l_k_bar: f64, l_k_arc_bar: f64, h_bar: f64| Sample {
+            l_k_bar,
+            l_k_arc_bar,
+            h_bar,
+            ..Sample::default()
+        };
         let (tighten, jump) = (
             Way(1.0),
             crate::measurements::InversionCriteria::default().knot_jump,
         );
-        let jumped = |way, from, arc, travelled| knot_jumped(way, from, arc, travelled, jump);
-        assert!(jumped(tighten, 71.11, 63.95, 0.0));
-        assert!(jumped(tighten, 71.11, 63.95, 0.5));
-        assert!(!jumped(tighten, 71.11, 70.81, 0.5));
+        let checkpoint = at(18.58, 71.11, 0.239);
+        assert!(knot_jumped(tighten, &checkpoint, &at(18.58, 63.95, 0.197), jump));
+        assert!(knot_jumped(tighten, &checkpoint, &at(18.08, 63.95, 0.197), jump));
+        assert!(!knot_jumped(tighten, &checkpoint, &at(18.08, 70.81, 0.197), jump));
         assert!(
-            !jumped(tighten, 71.11, 69.3, 1.5),
-            "a fall of 1.8 over 1.5 of travel"
+            !knot_jumped(tighten, &checkpoint, &at(17.08, 69.3, 0.197), jump),
+            "1.8 over 1.5 of travel"
         );
-        assert!(!jumped(tighten, 71.11, 63.95, MIN_LEAD));
-        assert!(jumped(Way(-1.0), 63.95, 71.11, 0.0));
-        assert!(!jumped(Way(-1.0), 71.11, 63.95, 0.0));
+        assert!(!knot_jumped(
+            tighten,
+            &checkpoint,
+            &at(18.58 - MIN_LEAD, 63.95, 0.197),
+            jump
+        ));
+        let crept = at(-136.56, 82.11, 0.271);
+        assert!(!knot_jumped(tighten, &at(-136.06, 86.94, 0.278), &crept, jump));
+        assert!(!knot_jumped(
+            Way(-1.0),
+            &at(63.95, 71.11, 0.239),
+            &at(63.95, 63.0, 0.197),
+            jump
+        ));
     }
 
     /// Checkpoints are found back along the stage, either way.

@@ -32,9 +32,9 @@ pub(super) struct Travel {
     /// knot's own length there.
     phase_start: f64,
     phase_start_arc: f64,
-    /// The knot's own length at the checkpoint the stage last went back to,
-    /// before its settle (the stage's start before any).
-    restored_arc: f64,
+    /// The series index of the sample of the checkpoint the stage last went
+    /// back to (its state before the settle).
+    restored_at: Option<usize>,
     /// Where (the knot's own length) the fast approach saw the event that
     /// the slow phase is resolving.
     fast_event: Option<f64>,
@@ -97,7 +97,7 @@ impl Case<'_> {
             phase,
             phase_start: start,
             phase_start_arc: start_arc,
-            restored_arc: start_arc,
+            restored_at: None,
             fast_event: None,
             event: None,
             reviewed: false,
@@ -243,13 +243,13 @@ impl Case<'_> {
                 let state = self.checkpoint(travel);
                 saved.keep(way, l_k_bar, arc, state);
             }
-            (Phase::Snap, event) if self.past_fold(travel, event, l_k_bar, arc) && !saved.list.is_empty() => {
+            (Phase::Snap, event) if self.past_fold(travel, event) && !saved.list.is_empty() => {
                 // The slow phase met its event, or its knot jumped, right
                 // after its restart: the restart was already past the fold.
                 // Go back further (from before the jump).
-                let from = match event {
-                    Some(_) => travel.phase_start_arc,
-                    None => travel.restored_arc,
+                let from = match (event, travel.restored_at) {
+                    (None, Some(i)) => self.report.series[i].l_k_arc_bar,
+                    _ => travel.phase_start_arc,
                 };
                 let (back, fast) = (
                     way.back(from, way.restart_before(self.turns())),
@@ -296,18 +296,20 @@ impl Case<'_> {
     }
 
     /// Whether a slow phase restarted past the fold: its `event` lies within
-    /// `MIN_LEAD` of its start or, without one, an overhand knot's own length
-    /// (`arc` at `l_k_bar`) has jumped from the checkpoint's
-    /// ([`adaptive::knot_jumped`]: through the settle, with the clamps held,
-    /// or right after it).
-    fn past_fold(&self, travel: &Travel, event: Option<Event>, l_k_bar: f64, arc: f64) -> bool {
+    /// `MIN_LEAD` of its start or, without one, an overhand knot has jumped
+    /// from its checkpoint to the last sample ([`adaptive::knot_jumped`]:
+    /// through the settle, with the clamps held, or right after it).
+    fn past_fold(&self, travel: &Travel, event: Option<Event>) -> bool {
         let way = travel.way;
         match event {
             Some(e) => !way.reached(e.at.l_k_arc_bar, way.on(travel.phase_start_arc, MIN_LEAD)),
             None => {
-                let travelled = way.along(travel.phase_start, l_k_bar);
-                let jump = self.criteria().knot_jump;
-                self.reads_loop() && adaptive::knot_jumped(way, travel.restored_arc, arc, travelled, jump)
+                let (series, jump) = (&self.report.series, self.criteria().knot_jump);
+                self.reads_loop()
+                    && travel
+                        .restored_at
+                        .zip(series.last())
+                        .is_some_and(|(i, now)| adaptive::knot_jumped(way, &series[i], now, jump))
             }
         }
     }
@@ -435,7 +437,7 @@ impl Case<'_> {
         self.carried = c.carried;
         *travel = c.travel;
         travel.restarts = restarts;
-        travel.restored_arc = self.l_k_arc_bar();
+        travel.restored_at = c.series.checked_sub(1);
         self.report.stats.restarts += 1;
         self.report.series.truncate(c.series);
         self.report.bend_series.truncate(c.series);

@@ -71,7 +71,8 @@ pub(super) const RESTART_BEFORE: f64 = 8.0;
 /// `RESTART_TURNS` before: its fast pull lags by more, about n (the loop is
 /// longer; the nylon line of L/h 625, n = 6, mu = 0.05 snapped at least 10
 /// late, so that 8 before restarted past the reference pull's fold and
-/// inverted 1.6 % after it, BENCHMARKS.md, "Any rod, the rest").
+/// inverted 1.6 % after it: CHANGELOG.md, "the restart window grows with
+/// the knot's turns").
 const RESTART_TURNS: f64 = 3.0;
 /// How far (l_k bar) before the fast release's flip back the slow release
 /// restarts: the fast release sees it later than the fast pull its snap (n = 4

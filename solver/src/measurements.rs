@@ -108,6 +108,12 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// How much further (radii) the knot's own length fell than eq. 11's
+    /// l_k bar (the clamps' travel) from this sample to `later`.
+    pub fn knot_jump_to(&self, later: &Sample) -> f64 {
+        (self.l_k_arc_bar - later.l_k_arc_bar) - (self.l_k_bar - later.l_k_bar)
+    }
+
     /// The elastic energy over EI / h.
     pub fn elastic_bar(&self) -> f64 {
         self.e_stretch_bar + self.e_bend_bar + self.e_twist_bar
@@ -525,7 +531,7 @@ impl Fall {
             ratio: peak / median,
             f_after,
             force_dropped,
-            knot_jump: (before.l_k_arc_bar - drop.l_k_arc_bar) - (before.l_k_bar - drop.l_k_bar),
+            knot_jump: before.knot_jump_to(drop),
         })
     }
 

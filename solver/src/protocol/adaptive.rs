@@ -298,10 +298,9 @@ const JUMP_LOOP_FALL: f64 = 0.9;
 /// pull tightens the knot by less than the clamps' travel (the tails'
 /// stretch grows with the force).
 pub(super) fn knot_jumped(way: Way, from: &Sample, now: &Sample, jump: f64) -> bool {
-    let travelled = way.along(from.l_k_bar, now.l_k_bar);
     way.0 > 0.0
-        && travelled < MIN_LEAD
-        && way.along(from.l_k_arc_bar, now.l_k_arc_bar) - travelled > jump
+        && way.along(from.l_k_bar, now.l_k_bar) < MIN_LEAD
+        && from.knot_jump_to(now) > jump
         && now.h_bar <= JUMP_LOOP_FALL * from.h_bar
 }
 

@@ -21,8 +21,8 @@ use std::collections::VecDeque;
 use std::time::Instant;
 
 /// F bar to which a bend's first pull tightens it with its tails held, to
-/// set it, before freeing them: half the default tight force, so that a
-/// bend that holds takes twice its setting load with its tails free.
+/// set it: half the default tight force, so that a bend that holds takes
+/// twice its setting load with its tails free.
 pub const BEND_SET_FORCE_BAR: f64 = 0.5 * crate::case::BEND_TIGHT_FORCE_BAR;
 /// A bend's rods have come apart when no two of their segments are closer
 /// than 2h plus this many radii...
@@ -33,10 +33,22 @@ pub(super) const PARTED: f64 = 0.5;
 /// along the pull, within reach of each other; a tied one's bights hold
 /// their bends.
 pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
-/// F bar of the constant load that holds a hitch's tail once it is let go
-/// (a fifth of the setting load): a free tail is flung off the cylinder by
-/// the turns' own bending as soon as it is let go (at mu 0.1 ... 0.5, R =
-/// 10 h), so the tail hangs a weight, as in a hitch's holding test.
+/// F bar to which a set bend is eased, its tails still held, before they
+/// are let go (a tenth of the setting load): a bend let go under a load it
+/// cannot hold slides apart at once, and its holding force would be read on
+/// that fall; let go nearly at rest, the pull that follows loads it up to
+/// its holding force. Not zero: an end that no longer pulls still drags
+/// its rod through the damping as it moves back.
+pub const BEND_EASED_FORCE_BAR: f64 = 0.1 * BEND_SET_FORCE_BAR;
+/// The farthest (radii h) an end moves back while it is eased: a tail
+/// trapped in the knot by friction may pull harder than the eased load
+/// however far it goes.
+pub(super) const EASE_TRAVEL: f64 = 10.0;
+/// F bar of the constant load that holds a hitch's tail once it is let go,
+/// and to which the set hitch is eased before (a fifth of the setting
+/// load): a free tail is flung off the cylinder by the turns' own bending
+/// as soon as it is let go (at mu 0.1 ... 0.5, R = 10 h), so the tail hangs
+/// a weight, as in a hitch's holding test.
 pub const HITCH_TAIL_FORCE_BAR: f64 = 0.2 * BEND_SET_FORCE_BAR;
 /// A hitch has slipped when its rod wraps the cylinder by less than this
 /// many turns: its tail has left the pinch under the diagonal and half a
@@ -130,7 +142,7 @@ fn build(case: &ValidCase, report: &mut CaseReport) -> Result<World, String> {
         rods[clamp.rod].clamp(clamp.end);
     }
     if shape.is_bend() {
-        // The tails are held while the bend relaxes and sets (`release_tails`).
+        // The tails are held while the bend relaxes and sets ([`Tails`]).
         for clamp in tails(&shape.clamps) {
             rods[clamp.rod].clamp(clamp.end);
         }
@@ -242,9 +254,8 @@ pub(super) struct Carried {
     pub(super) impulse_time: f64,
     /// Each pulled clamp's force integrated over the same time (a bend's).
     pub(super) clamp_impulses: [f64; 2],
-    /// A bend's tails, or a hitch's, are still held (until it has set,
-    /// `release_tails`).
-    pub(super) tails_held: bool,
+    /// Where a bend's tails, or a hitch's, stand in its setting.
+    pub(super) tails: Tails,
     /// Where a hitch's tail was held when it was let go: the far end of
     /// its l_k bar from then on.
     pub(super) tail_anchor: Option<Vector3<f64>>,
@@ -257,6 +268,25 @@ pub(super) struct Carried {
     pub(super) twist: Tracker,
     /// The latest samples' snapshots, for those around an event.
     pub(super) history: VecDeque<Snapshot>,
+}
+
+/// A bend's or a hitch's tails through its setting: held while it relaxes
+/// and its first pull tightens it to [`BEND_SET_FORCE_BAR`], held while the
+/// clamps ease it back to [`BEND_EASED_FORCE_BAR`] (a hitch to
+/// [`HITCH_TAIL_FORCE_BAR`]), then let go (a knot tied by
+/// hand is set by pulling its four ends before its standing ends are
+/// loaded; a loose bend of elastic rods springs open when its tails are
+/// free). A knot in one rod has none held.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Tails {
+    Held,
+    /// Easing: the held ends move back at `speed` (over `pull_speed`),
+    /// from the program's time `since` (s).
+    Easing {
+        speed: f64,
+        since: f64,
+    },
+    Free,
 }
 
 /// A case being run: its world, clock and the report being filled.
@@ -313,7 +343,11 @@ impl<'a> Case<'a> {
             impulse: 0.0,
             impulse_time: 0.0,
             clamp_impulses: [0.0; 2],
-            tails_held: start.is_bend() || start.is_hitch(),
+            tails: if start.is_bend() || start.is_hitch() {
+                Tails::Held
+            } else {
+                Tails::Free
+            },
             tail_anchor: None,
             tail_load: None,
             mid: start.loop_middle,
@@ -372,19 +406,72 @@ impl<'a> Case<'a> {
         (arc - (b - a).norm()) / self.params.h
     }
 
-    /// Frees a bend's tails once it has set: held while it relaxed and while
-    /// its first pull tightened it to F bar [`BEND_SET_FORCE_BAR`] (a loose
-    /// bend of elastic rods springs open when its tails are free; a knot
-    /// tied by hand is set by pulling its four ends before its standing ends
-    /// are loaded).
-    /// A hitch's tail is its second clamp: from then on it hangs a weight
-    /// ([`HITCH_TAIL_FORCE_BAR`]) and its standing end alone is pulled,
-    /// against the cylinder. Returns whether it freed them now.
-    pub(super) fn release_tails(&mut self, f_bar: f64) -> bool {
-        if !self.carried.tails_held || f_bar < BEND_SET_FORCE_BAR {
+    /// Starts easing a bend or a hitch once its first pull has set it (F bar
+    /// `f_bar` at least [`BEND_SET_FORCE_BAR`] with the tails held), its held
+    /// ends moving back at `speed` (over `pull_speed`); the set knot is kept
+    /// as a snapshot. Returns whether it started now.
+    pub(super) fn ease(&mut self, f_bar: f64, speed: f64) -> bool {
+        if self.carried.tails != Tails::Held || f_bar < BEND_SET_FORCE_BAR {
             return false;
         }
-        self.carried.tails_held = false;
+        self.carried.tails = Tails::Easing {
+            speed,
+            since: self.carried.time,
+        };
+        let at = self.l_k_bar();
+        self.report.snapshots.push(Snapshot::capture(
+            &self.world,
+            SnapshotLabel::Set,
+            at,
+            self.clock.elapsed,
+        ));
+        self.ease_ends();
+        true
+    }
+
+    /// One step of the easing: each held end (a bend's standing ends and
+    /// tails, a hitch's two ends) moves back towards the knot while it pulls
+    /// harder than [`BEND_EASED_FORCE_BAR`] (a hitch's:
+    /// [`HITCH_TAIL_FORCE_BAR`]) and stays where it is once it pulls less (a
+    /// tail held while the standing ends were pulled carries a load of its
+    /// own, which easing the standing ends does not take off), for
+    /// [`EASE_TRAVEL`] at most. Returns whether the knot is eased: no end
+    /// pulls harder, or the ends have gone as far back as they may.
+    pub(super) fn ease_ends(&mut self) -> bool {
+        let Tails::Easing { speed, since } = self.carried.tails else {
+            return false;
+        };
+        let speed = speed * self.params.clamp_speed();
+        if (self.carried.time - since) * speed >= EASE_TRAVEL * self.params.h {
+            for (end, _) in self.held_ends() {
+                self.world.rods[end.rod].move_clamp(end.end, Vector3::zeros());
+            }
+            return true;
+        }
+        let eased = match self.cylinder {
+            Some(_) => HITCH_TAIL_FORCE_BAR,
+            None => BEND_EASED_FORCE_BAR,
+        } * force_unit(self.params);
+        let mut held = false;
+        for (end, outward) in self.held_ends() {
+            let pull = self
+                .world
+                .stepper(end.rod)
+                .clamp_reaction(&self.world.rods[end.rod], end.end)
+                .0;
+            let back = pull.dot(&outward) > eased;
+            held |= back;
+            let v = if back { -outward * speed } else { Vector3::zeros() };
+            self.world.rods[end.rod].move_clamp(end.end, v);
+        }
+        !held
+    }
+
+    /// Lets an eased knot's tails go. A hitch's tail is its second clamp:
+    /// from then on it hangs a weight ([`HITCH_TAIL_FORCE_BAR`]) and its
+    /// standing end alone is pulled, against the cylinder.
+    pub(super) fn free_tails(&mut self) {
+        self.carried.tails = Tails::Free;
         let freed = match self.cylinder {
             Some(_) => {
                 self.carried.tail_anchor = Some(clamp_point(&self.world, &self.clamps[1]));
@@ -402,14 +489,25 @@ impl<'a> Case<'a> {
             }
         }
         self.world.forget_factorizations();
-        let at = self.l_k_bar();
-        self.report.snapshots.push(Snapshot::capture(
-            &self.world,
-            SnapshotLabel::Set,
-            at,
-            self.clock.elapsed,
-        ));
-        true
+    }
+
+    /// The ends held through a bend's or a hitch's setting, each with the
+    /// unit vector along the pull pointing away from the knot: the pulled
+    /// clamps and, for a bend, its tails (on the side of the knot's middle,
+    /// the pulled clamps' midpoint, where each lies).
+    fn held_ends(&self) -> Vec<(Clamp, Vector3<f64>)> {
+        let mut ends = vec![(self.clamps[0], -self.axis), (self.clamps[1], self.axis)];
+        if self.cylinder.is_none() {
+            let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
+            let middle = 0.5 * (a + b);
+            for tail in tails(&self.clamps) {
+                let side = (clamp_point(&self.world, &tail) - middle)
+                    .dot(&self.axis)
+                    .signum();
+                ends.push((tail, self.axis * side));
+            }
+        }
+        ends
     }
 
     /// Puts a hitch's tail load on its tail end, added to the sliding
@@ -807,7 +905,7 @@ impl<'a> Case<'a> {
             f_bar: forces.map(|f| f / force_unit(params)),
             energy_bar,
             apart,
-            tails_free: !c.tails_held,
+            tails_free: c.tails == Tails::Free,
             knots_apart_bar,
             knots_touch,
         });

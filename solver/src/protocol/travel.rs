@@ -12,7 +12,7 @@ use super::adaptive::{
 };
 use super::events;
 use super::report::{Event, EventKind};
-use super::runner::{Carried, Case, Ending, Observer};
+use super::runner::{Carried, Case, Ending, Observer, Tails};
 use super::snapshots::SnapshotPlan;
 use crate::case::{Direction, KnotKind, LoadStage};
 use crate::pipeline::World;
@@ -47,12 +47,6 @@ pub(super) struct Travel {
     watch_from: usize,
     /// Restarts the stage has taken (carried over a restore).
     restarts: u32,
-    /// Where (the knot's own length) the fast approach let a bend's or a
-    /// hitch's tails go at the last sample.
-    released: Option<f64>,
-    /// The slow phase goes through the tails' release (after the fast
-    /// approach let them go): fast again `SLOW_AFTER` past it.
-    slow_release: bool,
 }
 
 /// The state a fast approach can return to.
@@ -103,26 +97,30 @@ impl Case<'_> {
             reviewed: false,
             watch_from: first_sample,
             restarts: 0,
-            released: None,
-            slow_release: false,
         };
         self.enter(&mut travel, phase);
         let mut saved = Checkpoints::new(start);
         let ending = loop {
             let (step, dt) = self.step(travel.phase)?;
             let l_k_bar = self.l_k_bar();
-            if !way.reached(l_k_bar, travel.next_sample) {
+            let eased = self.ease_ends();
+            let moving = self.moving(&travel);
+            if !eased && !moving.reached(l_k_bar, travel.next_sample) {
                 continue;
             }
-            travel.next_sample = way.on(l_k_bar, self.params.sample_interval);
+            travel.next_sample = moving.on(l_k_bar, self.params.sample_interval);
             let points = self.sample(travel.phase, &step, dt, l_k_bar);
             let found = self.detect(&mut travel);
             self.keep_snapshots(&mut travel.snapshots, found, l_k_bar);
             self.topology(&points, || format!("at l_k bar {l_k_bar:.2}"))?;
-            if self.is_bend() && way.0 > 0.0 {
+            if eased {
+                self.free_tails();
+                self.pull_on(&mut travel, &mut saved, l_k_bar);
+            } else if self.is_bend() && way.0 > 0.0 {
                 let f_bar = self.report.series.last().map_or(0.0, |s| s.f_bar);
-                if self.release_tails(f_bar) && travel.phase == Phase::Approach {
-                    travel.released = Some(self.l_k_arc_bar());
+                let speed = travel.phase.speed(way.along(travel.phase_start, l_k_bar));
+                if self.ease(f_bar, speed) {
+                    travel.next_sample = self.moving(&travel).on(l_k_bar, self.params.sample_interval);
                 }
             }
             if self.report.bend_series.last().is_some_and(|b| b.apart) {
@@ -140,7 +138,11 @@ impl Case<'_> {
                 continue;
             }
             let tight = way.0 > 0.0 && self.params.tight_force_bar().is_some_and(|m| sample.f_bar > m);
-            if (way.reached(arc, stop) || tight) && !self.review_end(&mut travel, &mut saved, arc)? {
+            let easing = matches!(self.carried.tails, Tails::Easing { .. });
+            if (way.reached(arc, stop) || tight)
+                && !easing
+                && !self.review_end(&mut travel, &mut saved, arc)?
+            {
                 break Ok(());
             }
         };
@@ -148,6 +150,29 @@ impl Case<'_> {
             self.unmount_springs();
         }
         ending
+    }
+
+    /// Which way the clamps move l_k bar: the stage's, back while a set knot
+    /// is eased ([`super::runner::Tails`]).
+    fn moving(&self, travel: &Travel) -> Way {
+        match self.carried.tails {
+            Tails::Easing { .. } => Way(-travel.way.0),
+            _ => travel.way,
+        }
+    }
+
+    /// The set knot has been eased, sampled and its tails let go at
+    /// `l_k_bar`: the pull goes on from here, its phase's speed ramping up
+    /// again and, while fast, checkpointed (a restart through the holding
+    /// point comes back to the tails free).
+    fn pull_on(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>, l_k_bar: f64) {
+        travel.phase_start = l_k_bar;
+        travel.next_sample = travel.way.on(l_k_bar, self.params.sample_interval);
+        if travel.phase == Phase::Approach {
+            let state = self.checkpoint(travel);
+            saved.keep(travel.way, l_k_bar, self.l_k_arc_bar(), state);
+        }
+        self.drive(travel, l_k_bar);
     }
 
     /// A bend's rods have parted at the last sample: a fast approach goes
@@ -197,9 +222,8 @@ impl Case<'_> {
 
     /// The adaptive schedule's moves after a sample at `l_k_bar`, the knot's
     /// own length `arc`: back to a checkpoint when the fast approach sees an
-    /// event, lets a bend's or a hitch's tails go or, in an overhand knot,
-    /// sees a smeared snap of H bar (returns `true`), checkpoints while
-    /// fast, fast again past the event (or the tails' release) or after a
+    /// event or, in an overhand knot, a smeared snap of H bar (returns
+    /// `true`), checkpoints while fast, fast again past the event or after a
     /// false alarm; otherwise the clamps' speed.
     fn schedule(
         &mut self,
@@ -209,21 +233,6 @@ impl Case<'_> {
         arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
-        if let Some(at) = travel.released.take() {
-            // The fast approach let the tails go: the knot's response to the
-            // setting load let go (its holding force, or its slip) is met at
-            // `pull_speed`, as an event is.
-            if self.restart(
-                travel,
-                saved,
-                way.back(at, way.restart_before(None)),
-                Some(at),
-                Outcome::Restarted,
-            )? {
-                travel.slow_release = true;
-                return Ok(true);
-            }
-        }
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
             if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
                 let back = way.back(began, way.restart_before(self.turns()));
@@ -266,13 +275,6 @@ impl Case<'_> {
                 self.enter(travel, Phase::After);
             }
             (Phase::Snap | Phase::Fallback, None)
-                if travel.slow_release && self.released_behind(travel, arc) =>
-            {
-                self.end_phase(Outcome::Confirmed);
-                travel.slow_release = false;
-                self.enter(travel, Phase::After);
-            }
-            (Phase::Snap | Phase::Fallback, None)
                 if travel
                     .fast_event
                     .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
@@ -312,15 +314,6 @@ impl Case<'_> {
                         .is_some_and(|(i, now)| adaptive::knot_jumped(way, &series[i], now, jump))
             }
         }
-    }
-
-    /// Whether the stage let the tails go `SLOW_AFTER` or more before `arc`
-    /// (the knot's own length).
-    fn released_behind(&self, travel: &Travel, arc: f64) -> bool {
-        let freed = (self.report.bend_series.get(travel.first_sample..))
-            .and_then(|b| b.iter().position(|b| b.tails_free))
-            .map(|i| self.report.series[travel.first_sample + i].l_k_arc_bar);
-        freed.is_some_and(|at| travel.way.reached(arc, travel.way.on(at, SLOW_AFTER)))
     }
 
     /// Back to the latest checkpoint at or before `before` (the knot's own
@@ -403,6 +396,9 @@ impl Case<'_> {
     /// phases by what its tails' stretch takes up
     /// ([`adaptive::stretch_factor`]; other knots have no tails measured).
     fn drive(&mut self, travel: &Travel, l_k_bar: f64) {
+        if matches!(self.carried.tails, Tails::Easing { .. }) {
+            return; // each held end moves on its own (`Case::ease_ends`)
+        }
         let pulled = travel.way.along(travel.phase_start, l_k_bar);
         let stretch = match travel.phase {
             Phase::Snap | Phase::Fallback if self.params.knot == KnotKind::Overhand => {

@@ -418,13 +418,7 @@ impl<'a> Case<'a> {
             speed,
             since: self.carried.time,
         };
-        let at = self.l_k_bar();
-        self.report.snapshots.push(Snapshot::capture(
-            &self.world,
-            SnapshotLabel::Set,
-            at,
-            self.clock.elapsed,
-        ));
+        self.snapshot_now(SnapshotLabel::Set);
         self.ease_ends();
         true
     }
@@ -489,6 +483,13 @@ impl<'a> Case<'a> {
             }
         }
         self.world.forget_factorizations();
+    }
+
+    /// Keeps the rods as they are now as a snapshot labelled `label`.
+    fn snapshot_now(&mut self, label: SnapshotLabel) {
+        let at = self.l_k_bar();
+        let shot = Snapshot::capture(&self.world, label, at, self.clock.elapsed);
+        self.report.snapshots.push(shot);
     }
 
     /// The ends held through a bend's or a hitch's setting, each with the
@@ -612,13 +613,7 @@ impl<'a> Case<'a> {
         self.settle(self.params.relax_limit())?;
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
-        let at = self.l_k_bar();
-        self.report.snapshots.push(Snapshot::capture(
-            &self.world,
-            SnapshotLabel::Relaxed,
-            at,
-            self.clock.elapsed,
-        ));
+        self.snapshot_now(SnapshotLabel::Relaxed);
         Ok(())
     }
 
@@ -675,13 +670,7 @@ impl<'a> Case<'a> {
                 ));
             }
         }
-        let at = self.l_k_bar();
-        self.report.snapshots.push(Snapshot::capture(
-            &self.world,
-            SnapshotLabel::Final,
-            at,
-            self.clock.elapsed,
-        ));
+        self.snapshot_now(SnapshotLabel::Final);
         Ok(())
     }
 

@@ -289,3 +289,42 @@ fn documented_reef_start_is_the_builders() {
     .unwrap();
     assert_eq!(read.start(), built.start());
 }
+
+/// Sampling observes and does not steer: under the reference pull the reef
+/// (mu = 0.3) is set, eased and let go at the same step whether it is
+/// sampled every 0.5 or every 0.25 in l_k bar (the set met at a step, the
+/// easing ended at one), so its set snapshot and the first sample with its
+/// tails free lie at the same l_k bar and time.
+#[test]
+fn the_sampling_does_not_move_where_a_bend_is_set_and_let_go() {
+    let run = |sample_interval: f64| {
+        let params = CaseParams {
+            knot: KnotKind::Reef,
+            mu: 0.3,
+            protocol: solver::case::Protocol::Reference,
+            pull_speed: Some(0.05),
+            min_l_k_bar: 150.0,
+            sample_interval,
+            ..CaseParams::default()
+        };
+        let report = solver::protocol::run(&params, &mut |_| true);
+        assert_eq!(
+            report.status,
+            solver::protocol::Status::Completed,
+            "{}",
+            report.reason
+        );
+        let set = (report.snapshots.iter())
+            .find(|s| s.label == solver::snapshot::SnapshotLabel::Set)
+            .map(|s| (s.l_k_bar, s.time))
+            .expect("a set snapshot");
+        let freed = (report.bend_series.iter().position(|b| b.tails_free)).expect("the tails are let go");
+        let held = report.series[freed - 1];
+        (set, (held.l_k_bar, held.time))
+    };
+    let (coarse, fine) = (run(0.5), run(0.25));
+    assert_eq!(
+        coarse, fine,
+        "set and let go (l_k bar, s) at sample intervals 0.5 and 0.25"
+    );
+}

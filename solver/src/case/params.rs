@@ -160,12 +160,13 @@ pub const PARAMETERS: &[Parameter] = &[
               at the end and reported (alexander_initial, alexander_final: coefficients, lowest power first), and \
               the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends \
               \"reef\", \"granny\", \"thief\", \"grief\" and \"fisherman\" (two overhand knots, each round the \
-              other rod) tie two rods of length L together, pull their standing ends apart with the tails free until tight (max_force_bar, default 0.05) or until the rods slip \
-              apart, and report whether the rods still hold each other and the holding force (the largest F bar \
+              other rod) tie two rods of length L together, set them (the standing ends pulled apart to F bar \
+              0.025 with the tails held, then every end eased back to F bar 0.0025), let the tails go and pull \
+              the standing ends apart until tight (max_force_bar, default 0.05) or until the rods slip apart, and report whether the rods still hold each other and the holding force (the largest F bar \
               before they part), with l_k bar = (2L - the pulled clamps' distance) / h. \"clove_hitch\" ties the rod \
               round a rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls \
-              its two ends apart, away from the cylinder, until the hitch has set (F bar 0.025), lets the tail go \
-              with a weight of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default \
+              its two ends apart, away from the cylinder, until the hitch has set (F bar 0.025), eases both back \
+              to F bar 0.005, lets the tail go with a weight of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default \
               0.05) or until the rod slips round the cylinder (less than one and a half turns left on it): tied and \
               holding_force_bar as for a bend, \
               l_k bar = (L - the standing end's distance from where the tail was held) / h; the report carries \

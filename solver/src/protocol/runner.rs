@@ -406,12 +406,14 @@ impl<'a> Case<'a> {
         (arc - (b - a).norm()) / self.params.h
     }
 
-    /// Starts easing a bend or a hitch once its first pull has set it (F bar
-    /// `f_bar` at least [`BEND_SET_FORCE_BAR`] with the tails held), its held
-    /// ends moving back at `speed` (over `pull_speed`); the set knot is kept
-    /// as a snapshot. Returns whether it started now.
-    pub(super) fn ease(&mut self, f_bar: f64, speed: f64) -> bool {
-        if self.carried.tails != Tails::Held || f_bar < BEND_SET_FORCE_BAR {
+    /// Starts easing a bend or a hitch once its first pull has set it (the
+    /// pulling force after the last step at least [`BEND_SET_FORCE_BAR`]
+    /// with the tails held: met at a step, so that the sampling does not
+    /// move it), its held ends moving back at `speed` (over `pull_speed`);
+    /// the set knot is kept as a snapshot. Returns whether it started now.
+    pub(super) fn ease(&mut self, speed: f64) -> bool {
+        let set = self.pulling_force() >= BEND_SET_FORCE_BAR * force_unit(self.params);
+        if self.carried.tails != Tails::Held || !set {
             return false;
         }
         self.carried.tails = Tails::Easing {

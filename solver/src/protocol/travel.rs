@@ -104,6 +104,12 @@ impl Case<'_> {
             let (step, dt) = self.step(travel.phase)?;
             let l_k_bar = self.l_k_bar();
             let eased = self.ease_ends();
+            if self.is_bend() && way.0 > 0.0 {
+                let speed = travel.phase.speed(way.along(travel.phase_start, l_k_bar));
+                if self.ease(speed) {
+                    travel.next_sample = self.moving(&travel).on(l_k_bar, self.params.sample_interval);
+                }
+            }
             let moving = self.moving(&travel);
             if !eased && !moving.reached(l_k_bar, travel.next_sample) {
                 continue;
@@ -116,12 +122,6 @@ impl Case<'_> {
             if eased {
                 self.free_tails();
                 self.pull_on(&mut travel, &mut saved, l_k_bar);
-            } else if self.is_bend() && way.0 > 0.0 {
-                let f_bar = self.report.series.last().map_or(0.0, |s| s.f_bar);
-                let speed = travel.phase.speed(way.along(travel.phase_start, l_k_bar));
-                if self.ease(f_bar, speed) {
-                    travel.next_sample = self.moving(&travel).on(l_k_bar, self.params.sample_interval);
-                }
             }
             if self.report.bend_series.last().is_some_and(|b| b.apart) {
                 if self.slipped(&mut travel, &mut saved)? {

@@ -8,6 +8,18 @@ use solver::rod::End;
 /// The bends tied as two interlocked bights (the fisherman's: tests/fisherman.rs).
 const BENDS: [Bend; 4] = [Bend::Reef, Bend::Granny, Bend::Thief, Bend::Grief];
 
+/// Runs a case that must complete (a slipped bend completes).
+fn completed(params: &CaseParams) -> solver::protocol::CaseReport {
+    let report = solver::protocol::run(params, &mut |_| true);
+    assert_eq!(
+        report.status,
+        solver::protocol::Status::Completed,
+        "{}",
+        report.reason
+    );
+    report
+}
+
 fn tie(bend: Bend) -> (BendSpec, StartShape) {
     let spec = BendSpec {
         bend,
@@ -206,13 +218,7 @@ fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
         mu: 0.2,
         ..CaseParams::default()
     };
-    let report = solver::protocol::run(&params, &mut |_| true);
-    assert_eq!(
-        report.status,
-        solver::protocol::Status::Completed,
-        "{}",
-        report.reason
-    );
+    let report = completed(&params);
     assert_eq!(report.bend_series.len(), report.series.len());
     let setting = 0.5 * solver::case::BEND_TIGHT_FORCE_BAR;
     // The set: the last sample before the clamps turn back to ease the knot
@@ -325,13 +331,7 @@ fn the_sampling_does_not_move_where_a_bend_is_set_and_let_go() {
             sample_interval,
             ..CaseParams::default()
         };
-        let report = solver::protocol::run(&params, &mut |_| true);
-        assert_eq!(
-            report.status,
-            solver::protocol::Status::Completed,
-            "{}",
-            report.reason
-        );
+        let report = completed(&params);
         let set = (report.snapshots.iter())
             .find(|s| s.label == solver::snapshot::SnapshotLabel::Set)
             .map(|s| (s.l_k_bar, s.time))

@@ -439,7 +439,7 @@ impl<'a> Case<'a> {
         };
         let speed = speed * self.params.clamp_speed();
         if (self.carried.time - since) * speed >= EASE_TRAVEL * self.params.h {
-            for (end, _) in self.held_ends() {
+            for (end, _) in self.held_ends().into_iter().flatten() {
                 self.world.rods[end.rod].move_clamp(end.end, Vector3::zeros());
             }
             return true;
@@ -449,7 +449,7 @@ impl<'a> Case<'a> {
             None => BEND_EASED_FORCE_BAR,
         } * force_unit(self.params);
         let mut held = false;
-        for (end, outward) in self.held_ends() {
+        for (end, outward) in self.held_ends().into_iter().flatten() {
             let pull = self
                 .world
                 .stepper(end.rod)
@@ -497,20 +497,22 @@ impl<'a> Case<'a> {
     /// The ends held through a bend's or a hitch's setting, each with the
     /// unit vector along the pull pointing away from the knot: the pulled
     /// clamps and, for a bend, its tails (on the side of the knot's middle,
-    /// the pulled clamps' midpoint, where each lies).
-    fn held_ends(&self) -> Vec<(Clamp, Vector3<f64>)> {
-        let mut ends = vec![(self.clamps[0], -self.axis), (self.clamps[1], self.axis)];
-        if self.cylinder.is_none() {
-            let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
-            let middle = 0.5 * (a + b);
-            for tail in tails(&self.clamps) {
-                let side = (clamp_point(&self.world, &tail) - middle)
-                    .dot(&self.axis)
-                    .signum();
-                ends.push((tail, self.axis * side));
-            }
-        }
-        ends
+    /// the pulled clamps' midpoint, where each lies); a hitch has no more.
+    fn held_ends(&self) -> [Option<(Clamp, Vector3<f64>)>; 4] {
+        let [a, b] = self.clamps.map(|c| clamp_point(&self.world, &c));
+        let middle = 0.5 * (a + b);
+        let [t0, t1] = tails(&self.clamps).map(|tail| {
+            let side = (clamp_point(&self.world, &tail) - middle)
+                .dot(&self.axis)
+                .signum();
+            self.cylinder.is_none().then_some((tail, self.axis * side))
+        });
+        [
+            Some((self.clamps[0], -self.axis)),
+            Some((self.clamps[1], self.axis)),
+            t0,
+            t1,
+        ]
     }
 
     /// Puts a hitch's tail load on its tail end, added to the sliding

@@ -412,8 +412,8 @@ impl<'a> Case<'a> {
     /// move it), its held ends moving back at `speed` (over `pull_speed`);
     /// the set knot is kept as a snapshot. Returns whether it started now.
     pub(super) fn ease(&mut self, speed: f64) -> bool {
-        let set = self.pulling_force() >= BEND_SET_FORCE_BAR * force_unit(self.params);
-        if self.carried.tails != Tails::Held || !set {
+        let set = BEND_SET_FORCE_BAR * force_unit(self.params);
+        if self.carried.tails != Tails::Held || self.pulling_force() < set {
             return false;
         }
         self.carried.tails = Tails::Easing {

@@ -102,9 +102,13 @@ fn flag(p: &Parameter, default: &Value) -> clap::Arg {
         Range::Words(words) => words,
         _ => &[],
     };
+    let nullable = p.null.is_some();
     arg.help(p.description())
         .allow_negative_numbers(true)
         .value_parser(move |text: &str| {
+            if nullable && text == "null" {
+                return Ok(Value::Null);
+            }
             if !words.is_empty() && !words.contains(&text) {
                 let known: Vec<String> = words.iter().map(|w| format!("{w:?}")).collect();
                 return Err(format!("must be one of {}", known.join(", ")));
@@ -259,6 +263,23 @@ mod tests {
         assert_eq!(bits(&a), bits(&b));
         assert_eq!(a.events, b.events);
         assert_eq!((a.tied, a.holding_force_bar), (b.tied, b.holding_force_bar));
+    }
+
+    /// A nullable parameter's flag takes `null` (its help says what null
+    /// means); another's does not.
+    #[test]
+    fn a_nullable_flag_takes_null() {
+        use clap::{Args, FromArgMatches};
+        let parse = |args: &[&str]| {
+            let cmd = super::ParamFlags::augment_args(clap::Command::new("run"));
+            let matches = cmd.try_get_matches_from(args.iter().copied())?;
+            super::ParamFlags::from_arg_matches(&matches)
+        };
+        let flags = parse(&["run", "--stop-after-inversion", "null"]).unwrap();
+        assert_eq!(flags.params().unwrap().stop_after_inversion, None);
+        let flags = parse(&["run", "--stop-after-inversion", "4"]).unwrap();
+        assert_eq!(flags.params().unwrap().stop_after_inversion, Some(4.0));
+        assert!(parse(&["run", "--mu", "null"]).is_err());
     }
 
     #[test]

@@ -392,6 +392,12 @@ pub struct InversionCriteria {
     /// bar at 0.06 (EA / EI = 4 / h^2 over L/h 625), which F bar's own fall
     /// confirms already.
     pub knot_jump: f64,
+    /// A loop whose H bar stays below this within the window has no fall to
+    /// read: it is flat, and its H bar is the contacts' noise (n = 5 at L/h
+    /// 2500, mu = 0.2, after its loop collapsed: 0.031 -> 0.015 at F bar 0.40;
+    /// the paper's rod n = 6: 0.004). Every snap measured begins from 0.186 or
+    /// more (docs/FIDELITY.md).
+    pub flat_loop: f64,
 }
 
 impl Default for InversionCriteria {
@@ -403,6 +409,7 @@ impl Default for InversionCriteria {
             force_drop: 0.8,
             confirmed_drop_fraction: 0.75,
             knot_jump: 2.0,
+            flat_loop: 0.1,
         }
     }
 }
@@ -437,7 +444,7 @@ impl Reading {
 /// The first sudden drop of H bar that the kinetic energy confirms, and the
 /// force drop around it (paper Fig. 5): [`detect_fall`] read on H bar.
 pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
-    detect_fall(series, criteria, Reading::LoopHeight)
+    detect_fall(series, criteria, Reading::LoopHeight, 0)
 }
 
 /// The first sudden fall of `reading` that the kinetic energy confirms, and
@@ -455,9 +462,20 @@ pub fn detect_inversion(series: &[Sample], criteria: &InversionCriteria) -> Opti
 /// `knot_jump`) confirm it and H bar stays above `drop_fraction`
 /// of that largest value for the [`ONSET_SAMPLES`] samples after it (a
 /// deeper fall there is read by the first rule, as before).
-pub fn detect_fall(series: &[Sample], criteria: &InversionCriteria, reading: Reading) -> Option<Inversion> {
+///
+/// The kinetic energy is read only from sample `quiet_from` on: the samples
+/// before it were taken at another pace (a fast approach, before a slow pull
+/// restarted from its checkpoint), whose kinetic energy is no baseline for a
+/// snap at `pull_speed` (the paper's rod n = 6 collapses its loop a few l_k
+/// bar after such a restart: CHANGELOG.md, physics revision 21).
+pub fn detect_fall(
+    series: &[Sample],
+    criteria: &InversionCriteria,
+    reading: Reading,
+    quiet_from: usize,
+) -> Option<Inversion> {
     (1..series.len()).find_map(|j| {
-        let fall = Fall::at(series, j, criteria, reading)?;
+        let fall = Fall::at(series, j, criteria, reading, quiet_from)?;
         let level = reading.level(&series[j]);
         let spiked = fall.ratio >= criteria.kinetic_energy_spike;
         let deep = level <= criteria.drop_fraction * fall.reference && (spiked || fall.force_dropped);
@@ -487,7 +505,13 @@ struct Fall {
 }
 
 impl Fall {
-    fn at(series: &[Sample], j: usize, criteria: &InversionCriteria, reading: Reading) -> Option<Self> {
+    fn at(
+        series: &[Sample],
+        j: usize,
+        criteria: &InversionCriteria,
+        reading: Reading,
+        quiet_from: usize,
+    ) -> Option<Self> {
         let drop = &series[j];
         // A drop is judged against a full window of history (the first
         // samples of a pull may still carry the relaxation's transients).
@@ -501,21 +525,25 @@ impl Fall {
             .take_while(|(_, s)| s.l_k_bar - drop.l_k_bar <= criteria.window)
             .map(|(i, s)| (i, reading.level(s)))
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        let flat = reading == Reading::LoopHeight && reference < criteria.flat_loop;
         if reference <= 0.0
+            || flat
             || reading.level(drop) > criteria.drop_fraction.max(criteria.confirmed_drop_fraction) * reference
         {
             return None;
         }
         let before = &series[j - 1];
-        let lo = start.saturating_sub(20);
-        let mut ke: Vec<f64> = series[lo..start.max(lo + 1)]
+        let quiet = if j >= quiet_from { quiet_from } else { 0 };
+        let start_quiet = start.max(quiet);
+        let lo = start_quiet.saturating_sub(20).max(quiet);
+        let mut ke: Vec<f64> = series[lo..start_quiet.max(lo + 1)]
             .iter()
             .map(|s| s.kinetic_energy)
             .collect();
         ke.sort_by(f64::total_cmp);
         let median = ke[ke.len() / 2].max(f64::MIN_POSITIVE);
         let hi = (j + 4).min(series.len());
-        let peak = series[start..hi]
+        let peak = series[start_quiet..hi]
             .iter()
             .map(|s| s.kinetic_energy)
             .fold(0.0, f64::max);
@@ -613,11 +641,13 @@ pub fn snap_onset(series: &[Sample], at: Inversion, criteria: &InversionCriteria
 /// the kinetic energy from that smallest-H sample to a few samples after
 /// exceeding `kinetic_energy_spike` times its median over the samples
 /// before. The mirror of [`detect_inversion`]: a loop that lay flat after
-/// the inversion stands up again on the other side.
+/// the inversion stands up again on the other side, to at least
+/// `flat_loop`.
 pub fn detect_flip_back(series: &[Sample], criteria: &InversionCriteria) -> Option<Inversion> {
     for j in 1..series.len() {
         let rise = &series[j];
-        if rise.width <= 0.0 || rise.l_k_bar - series[0].l_k_bar < criteria.window {
+        let flat = rise.h_bar < criteria.flat_loop;
+        if rise.width <= 0.0 || flat || rise.l_k_bar - series[0].l_k_bar < criteria.window {
             continue;
         }
         let Some((start, reference)) = series[..j]
@@ -982,6 +1012,45 @@ mod tests {
             detect_inversion(&snap(6.85, 1e-9), &criteria).is_none(),
             "no burst"
         );
+    }
+
+    /// The snap of `sudden_drop_with_energy_spike_is_an_inversion` scaled
+    /// down to a flat loop (H bar 0.03 -> 0.002, below `flat_loop`) is its
+    /// contacts' noise, however the kinetic energy and F bar move; scaled to
+    /// just above it, a snap.
+    #[test]
+    fn a_flat_loop_has_no_fall_to_read() {
+        let criteria = InversionCriteria::default();
+        let scaled = |top: f64| {
+            let mut s: Vec<Sample> = (0..40)
+                .map(|k| sample(200.0 - k as f64, top, 1e-9, 1.0 + 0.01 * k as f64))
+                .collect();
+            s.push(sample(160.0, top / 16.0, 1e-6, 0.6));
+            s.push(sample(159.0, top / 20.0, 1e-8, 0.9));
+            s
+        };
+        assert!(detect_inversion(&scaled(0.03), &criteria).is_none());
+        let inv = detect_inversion(&scaled(1.01 * criteria.flat_loop), &criteria).expect("detected");
+        assert_eq!(inv.l_k_bar, 161.0);
+    }
+
+    /// A slow pull restarted from a fast approach's checkpoint at sample 40:
+    /// the fast samples' kinetic energy (1e-6) is no baseline for the slow
+    /// pull's (2e-8), whose loop collapses with 30 times its own. Read from
+    /// the restart on, the collapse is a snap; read across it, it is not.
+    #[test]
+    fn the_kinetic_energy_is_read_from_the_slow_pull_on() {
+        let criteria = InversionCriteria::default();
+        let mut s: Vec<Sample> = (0..40)
+            .map(|k| sample(240.0 - k as f64, 0.2, 1e-6, 0.02))
+            .collect();
+        s.extend((0..4).map(|k| sample(200.0 - k as f64, 0.19, 2e-8, 0.02)));
+        s.push(sample(196.0, 0.03, 6e-7, 0.021));
+        s.push(sample(195.0, 0.03, 2e-8, 0.022));
+        assert!(detect_fall(&s, &criteria, Reading::LoopHeight, 0).is_none());
+        let inv = detect_fall(&s, &criteria, Reading::LoopHeight, 40).expect("a snap");
+        assert_eq!((inv.l_k_bar, inv.sample), (197.0, 43));
+        assert!((inv.kinetic_energy_ratio - 30.0).abs() < 1e-9, "{inv:?}");
     }
 
     #[test]

@@ -575,7 +575,8 @@ pub const PARAMETERS: &[Parameter] = &[
         null: None,
         paper: "",
         doc: "Stop when the knot's own length l_k arc bar, (arc length - l_c) / h (l_k bar less the rod's stretch), \
-              falls below this.",
+              falls below this, or, without max_force_bar, where the knot is tight (its own length gives less than 5 \
+              while F bar rises by 0.1).",
         value: |p| Some(Value::Number(p.min_l_k_bar)),
     },
     Parameter {

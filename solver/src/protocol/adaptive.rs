@@ -19,13 +19,16 @@
 //! later in l_k bar, and a restart `RESTART_BEFORE` before it lands past the
 //! fold). Checkpoints are due by l_k bar, the clamps' travel.
 //!
-//! A stage goes back at most `MAX_RESTARTS` times. The snap phase ends when
-//! its event is confirmed (seen at `pull_speed`), refuted (`FALSE_ALARM` past
-//! the fast pull's event without one: fast again, the fall it saw no longer
-//! watched) or found too soon after the restart (going back further); its
-//! span in the report says which ([`Outcome`]). The last restart runs the
+//! A stage goes back at most `MAX_RESTARTS` times for one event. The snap
+//! phase ends when its event is confirmed (seen at `pull_speed`), refuted
+//! (`FALSE_ALARM` past the fast pull's event without one: fast again, the
+//! fall it saw no longer watched), or found too soon after the restart or
+//! its loop fallen flat without a snap read (going back further); its span
+//! in the report says which ([`Outcome`]). The last restart runs the
 //! reference pull through the stretch ([`Phase::Fallback`]): to the event
-//! and `SLOW_AFTER` past it, or, refuted, to the stage's end.
+//! and `SLOW_AFTER` past it or, refuted, `FALSE_ALARM` past the fast pull's
+//! event, whence the approach goes on fast, its next event with restarts of
+//! its own and no checkpoint before the stretch.
 //!
 //! On a rod longer than its knot the slow phases also move the clamps by
 //! what the straight tails' elastic stretch takes up ([`stretch_factor`]),
@@ -114,8 +117,8 @@ const SMEARED_WINDOW: f64 = 20.0;
 const SMEARED_SPAN: f64 = 5.0;
 /// Checkpoints kept (they span several retries of `RESTART_BEFORE`).
 pub(super) const CHECKPOINTS: usize = 24;
-/// Restarts from a checkpoint a stage may take: the last one falls back to
-/// the reference pull ([`Phase::Fallback`]).
+/// Restarts from a checkpoint a stage may take for one event: the last one
+/// falls back to the reference pull ([`Phase::Fallback`]).
 pub const MAX_RESTARTS: u32 = 2;
 /// The stretch of the tails is read from the samples within this much l_k
 /// bar of the last (the force's slope against l_k bar, least squares over
@@ -154,7 +157,7 @@ pub enum Phase {
     After,
     /// At `pull_speed` from the stage's last restart ([`MAX_RESTARTS`]):
     /// the schedule gave up going back and runs the reference pull through
-    /// the event, or to the stage's end when the event is refuted.
+    /// the event, or `FALSE_ALARM` past the fast pull's when it is refuted.
     Fallback,
     /// The clamps held still (a hold stage).
     Hold,
@@ -224,8 +227,10 @@ pub enum Outcome {
     /// Passed the fast pull's event by `FALSE_ALARM` without one.
     Refuted,
     /// Its event came within `MIN_LEAD` of the restart, or its knot jumped
-    /// there ([`knot_jumped`]), so that the restart was past the fold: the
-    /// stage goes back further.
+    /// there ([`knot_jumped`]), or its loop fell flat without a snap the
+    /// detector read (the restart came too close to the fold for the kinetic
+    /// energy's baseline to settle), so that the restart was at or past the
+    /// fold: the stage goes back further.
     TooLate,
 }
 
@@ -312,12 +317,13 @@ pub(super) fn knot_jumped(way: Way, from: &Sample, now: &Sample, jump: f64) -> b
 /// after it) and where H bar is now. The damping slows the snap down while the
 /// clamps go on moving, so that it spans many samples without the sudden drop
 /// that detection looks for (n = 5: H bar 0.18 -> 0.07 over about 20 l_k bar,
-/// where the reference pull snaps at once).
-pub(super) fn smeared_snap(series: &[Sample]) -> Option<(f64, f64)> {
+/// where the reference pull snaps at once). A loop below `flat_loop`
+/// (`InversionCriteria::flat_loop`) has no fall to read.
+pub(super) fn smeared_snap(series: &[Sample], flat_loop: f64) -> Option<(f64, f64)> {
     let last = series.last().filter(|s| s.h_bar > 0.0)?;
     let window = || (series.iter().rev()).take_while(|s| s.l_k_arc_bar <= last.l_k_arc_bar + SMEARED_WINDOW);
     let peak = window().map(|s| s.h_bar).fold(0.0, f64::max);
-    if last.h_bar >= SMEARED_FALL * peak {
+    if peak < flat_loop || last.h_bar >= SMEARED_FALL * peak {
         return None;
     }
     let began = window().find(|s| s.h_bar >= SMEARED_START * peak)?.l_k_arc_bar;
@@ -414,8 +420,9 @@ mod tests {
     #[test]
     fn a_fall_of_h_bar_spread_over_many_samples_is_a_smeared_snap() {
         // Steady at 0.2 down to 290, then falling linearly to 0.02 at 272.
+        let flat_loop = crate::measurements::InversionCriteria::default().flat_loop;
         let smeared = series(|l| if l > 290.0 { 0.2 } else { 0.2 - 0.01 * (290.0 - l) });
-        let (began, now) = smeared_snap(&smeared).expect("a smeared snap");
+        let (began, now) = smeared_snap(&smeared, flat_loop).expect("a smeared snap");
         assert_eq!(now, 270.5);
         assert!(
             (began - 288.0).abs() < 0.01,
@@ -423,11 +430,23 @@ mod tests {
         );
         // A sudden drop is left to the inversion detection.
         assert_eq!(
-            smeared_snap(&series(|l| if l > 275.0 { 0.2 } else { 0.05 })),
+            smeared_snap(&series(|l| if l > 275.0 { 0.2 } else { 0.05 }), flat_loop),
             None
         );
         // Steady tightening: 10 % over the window.
-        assert_eq!(smeared_snap(&series(|l| 0.2 - 0.001 * (300.0 - l))), None);
+        assert_eq!(
+            smeared_snap(&series(|l| 0.2 - 0.001 * (300.0 - l)), flat_loop),
+            None
+        );
+        // The same fall on a flat loop, a tenth as high: its noise.
+        let flat = series(|l| {
+            if l > 290.0 {
+                0.02
+            } else {
+                0.02 - 0.001 * (290.0 - l)
+            }
+        });
+        assert_eq!(smeared_snap(&flat, flat_loop), None);
     }
 
     /// A force rising by 0.0006 per l_k bar of tightening, about a rubber

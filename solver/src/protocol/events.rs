@@ -9,21 +9,23 @@ use crate::case::Direction;
 use crate::measurements::{self, InversionCriteria, Reading, Sample};
 
 /// The overhand knot's first event (read on H bar) in the stage `stage`
-/// whose samples start at `first` in `series`, moving `way`; its sample
-/// index is the series'.
+/// whose samples start at `first` in `series`, moving `way`, a tightening's
+/// kinetic energy read from `quiet_from` on ([`measurements::detect_fall`]);
+/// its sample index is the series'.
 pub(super) fn detect(
     series: &[Sample],
-    first: usize,
+    (first, quiet_from): (usize, usize),
     way: Way,
     criteria: &InversionCriteria,
     stage: usize,
 ) -> Option<Event> {
     let own = &series[first..];
+    let quiet = quiet_from.saturating_sub(first);
     let (kind, direction, found) = if way.0 > 0.0 {
         (
             EventKind::Inversion,
             Direction::Tighten,
-            measurements::detect_inversion(own, criteria),
+            measurements::detect_fall(own, criteria, Reading::LoopHeight, quiet),
         )
     } else {
         (
@@ -85,7 +87,7 @@ pub(super) fn detect_snap(
     criteria: &InversionCriteria,
     stage: usize,
 ) -> Option<Event> {
-    let mut at = measurements::detect_fall(&series[from..], criteria, Reading::Force)?;
+    let mut at = measurements::detect_fall(&series[from..], criteria, Reading::Force, 0)?;
     at.sample += from;
     Some(Event {
         stage,
@@ -164,16 +166,16 @@ mod tests {
             |l| if l < 320.0 { 0.1 } else { 0.3 },
             |l| (320.0..322.0).contains(&l),
         );
-        let event = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
+        let event = detect(&rising, (0, 0), Way(-1.0), &criteria, 2).expect("a flip back");
         assert_eq!(
             (event.kind, event.direction, event.stage),
             (EventKind::FlipBack, Direction::Loosen, 2)
         );
         assert_eq!(event.at.l_k_bar, 319.5);
         assert!(event.clean);
-        assert_eq!(detect(&rising, 0, Way(1.0), &criteria, 2), None);
+        assert_eq!(detect(&rising, (0, 0), Way(1.0), &criteria, 2), None);
         let falling = series(-1.0, |l| if l < 320.0 { 0.3 } else { 0.1 }, |_| false);
-        assert_eq!(detect(&falling, 0, Way(-1.0), &criteria, 2), None);
+        assert_eq!(detect(&falling, (0, 0), Way(-1.0), &criteria, 2), None);
     }
 
     /// An inversion that the detector reads a sample into its snap (H bar
@@ -193,7 +195,7 @@ mod tests {
             },
             |l| (279.0..281.0).contains(&l),
         ));
-        let found = detect(&all, first, Way(1.0), &criteria, 1).expect("an inversion");
+        let found = detect(&all, (first, first), Way(1.0), &criteria, 1).expect("an inversion");
         assert_eq!((found.at.l_k_bar, found.at.sample), (280.0, first + 40));
         let onset = reported(&all, first, &criteria, found);
         assert_eq!((onset.at.l_k_bar, onset.at.sample), (280.5, first + 39));
@@ -203,7 +205,7 @@ mod tests {
             |l| if l < 320.0 { 0.1 } else { 0.3 },
             |l| (320.0..322.0).contains(&l),
         );
-        let back = detect(&rising, 0, Way(-1.0), &criteria, 2).expect("a flip back");
+        let back = detect(&rising, (0, 0), Way(-1.0), &criteria, 2).expect("a flip back");
         assert_eq!(reported(&rising, 0, &criteria, back), back);
     }
 
@@ -222,9 +224,9 @@ mod tests {
             |l| if l < 320.0 { 0.1 } else { 0.3 },
             |l| (320.0..322.0).contains(&l),
         ));
-        let inversion = detect(&all, 0, Way(1.0), &criteria, 0).unwrap();
+        let inversion = detect(&all, (0, 0), Way(1.0), &criteria, 0).unwrap();
         assert_eq!(inversion.kind, EventKind::Inversion);
-        let back = detect(&all, first, Way(-1.0), &criteria, 1).unwrap();
+        let back = detect(&all, (first, first), Way(-1.0), &criteria, 1).unwrap();
         assert_eq!(
             back.at.sample,
             first + 39,

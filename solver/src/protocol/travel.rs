@@ -4,8 +4,9 @@
 //! stops where the knot's own length l_k arc bar reaches the stage's target or
 //! the stopping rules (a rod longer than its knot stops where the paper's rod
 //! would, its tails' stretch aside); events are detected in the stage's own
-//! samples; the adaptive schedule ([`super::adaptive`]) runs pulls and
-//! releases fast far from them.
+//! samples; a tightening without a target or a force to stop at also stops
+//! where the knot is tight ([`super::tight`]); the adaptive schedule
+//! ([`super::adaptive`]) runs pulls and releases fast far from them.
 use super::adaptive::{
     self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
     SLOW_AFTER, Way,
@@ -14,6 +15,7 @@ use super::events;
 use super::report::{Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer, Tails};
 use super::snapshots::SnapshotPlan;
+use super::tight;
 use crate::case::{Direction, KnotKind, LoadStage};
 use crate::pipeline::World;
 use crate::rod::{End, Spring, node_dof};
@@ -137,11 +139,15 @@ impl Case<'_> {
             if self.schedule(&mut travel, &mut saved, l_k_bar, arc)? {
                 continue;
             }
-            let tight = way.0 > 0.0 && self.params.tight_force_bar().is_some_and(|m| sample.f_bar > m);
+            let tight = way.0 > 0.0
+                && match self.params.tight_force_bar() {
+                    Some(max) => sample.f_bar > max,
+                    None => target.is_none() && tight::is_tight(&self.report.series[travel.first_sample..]),
+                };
             let easing = matches!(self.carried.tails, Tails::Easing { .. });
             if (way.reached(arc, stop) || tight)
                 && !easing
-                && !self.review_end(&mut travel, &mut saved, arc)?
+                && !self.review_end(&mut travel, &mut saved, arc, tight.then_some(l_k_bar))?
             {
                 break Ok(());
             }
@@ -234,7 +240,10 @@ impl Case<'_> {
     ) -> Result<bool, Ending> {
         let way = travel.way;
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
-            if let Some((began, fell)) = adaptive::smeared_snap(&self.report.series[travel.watch_from..]) {
+            if let Some((began, fell)) = adaptive::smeared_snap(
+                &self.report.series[travel.watch_from..],
+                self.criteria().flat_loop,
+            ) {
                 let back = way.back(began, way.restart_before(self.turns()));
                 if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
                     return Ok(true);
@@ -274,27 +283,65 @@ impl Case<'_> {
                 self.end_phase(Outcome::Confirmed);
                 self.enter(travel, Phase::After);
             }
+            (Phase::Snap, None)
+                if self.fell_flat(travel)
+                    && travel
+                        .fast_event
+                        .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
+            {
+                // The loop fell flat without a snap the detector read: the
+                // restart came too close to the fold for the kinetic energy's
+                // baseline to settle. Go back further.
+                let (back, fast) = (
+                    way.back(travel.phase_start_arc, way.restart_before(self.turns())),
+                    travel.fast_event,
+                );
+                if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
+                    return Ok(true);
+                }
+                self.refute(travel, saved, l_k_bar);
+            }
             (Phase::Snap | Phase::Fallback, None)
                 if travel
                     .fast_event
                     .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
             {
-                self.end_phase(Outcome::Refuted);
-                travel.fast_event = None;
-                if travel.phase == Phase::Snap {
-                    // The fast pull's event was its own swinging: approach
-                    // again, no longer watching the fall it saw.
-                    travel.watch_from = self.report.series.len();
-                    self.enter(travel, Phase::Approach);
-                    saved.next = l_k_bar;
-                } else {
-                    // No restart left: the reference pull to the stage's end.
-                    self.enter(travel, Phase::Reference);
-                }
+                self.refute(travel, saved, l_k_bar);
             }
             _ => self.drive(travel, l_k_bar),
         }
         Ok(false)
+    }
+
+    /// The slow phase passed `FALSE_ALARM` beyond the fast pull's event
+    /// without one: that event was the fast pull's own swinging. Approach
+    /// again, no longer watching the fall it saw, checkpointed from here
+    /// (`l_k_bar`); past a fallback, the reference pull went through the
+    /// stretch: the next event has restarts of its own, and none goes back
+    /// into it.
+    fn refute(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>, l_k_bar: f64) {
+        self.end_phase(Outcome::Refuted);
+        travel.fast_event = None;
+        if travel.phase == Phase::Fallback {
+            travel.restarts = 0;
+            saved.list.clear();
+        }
+        travel.watch_from = self.report.series.len();
+        self.enter(travel, Phase::Approach);
+        saved.next = l_k_bar;
+    }
+
+    /// Whether an overhand knot's loop fell flat in the current phase: its
+    /// H bar rose to `flat_loop` or above in it
+    /// ([`crate::measurements::InversionCriteria::flat_loop`]) and lies below
+    /// now.
+    fn fell_flat(&self, travel: &Travel) -> bool {
+        let flat = self.criteria().flat_loop;
+        let from = travel.restored_at.map_or(self.report.series.len(), |i| i + 1);
+        let phase = &self.report.series[from.min(self.report.series.len())..];
+        self.reads_loop()
+            && phase.iter().any(|s| s.h_bar >= flat)
+            && phase.last().is_some_and(|s| s.h_bar < flat)
     }
 
     /// Whether a slow phase restarted past the fold: its `event` lies within
@@ -343,19 +390,33 @@ impl Case<'_> {
     /// last `END_REVIEW` of the stage (the knot's own length, from `arc`)
     /// from a checkpoint, once, slowly to the end (returns `true`); not when
     /// a slow phase went through most of it (refuted within `END_REVIEW` of
-    /// the end).
+    /// the end). A knot stopped tight at `tight` (l_k bar) redoes at most the
+    /// last `END_REVIEW` of the clamps' travel: locked, it gives little of
+    /// its own length to a long travel.
     fn review_end(
         &mut self,
         travel: &mut Travel,
         saved: &mut Checkpoints<Checkpoint>,
         arc: f64,
+        tight: Option<f64>,
     ) -> Result<bool, Ending> {
-        let refuted = travel.watch_from > travel.first_sample;
-        let fast_since = travel.way.along(travel.phase_start_arc, arc);
+        let (way, refuted) = (travel.way, travel.watch_from > travel.first_sample);
+        let fast_since = way.along(travel.phase_start_arc, arc);
         if travel.phase != Phase::Approach || travel.reviewed || (refuted && fast_since < END_REVIEW) {
             return Ok(false);
         }
-        let back = travel.way.back(arc, END_REVIEW);
+        let mut back = way.back(arc, END_REVIEW);
+        let series = &self.report.series[travel.first_sample..];
+        if let Some(travelled) = tight.and_then(|l| {
+            series
+                .iter()
+                .rev()
+                .find(|s| way.along(s.l_k_bar, l) >= END_REVIEW)
+        }) {
+            if way.reached(travelled.l_k_arc_bar, back) {
+                back = travelled.l_k_arc_bar;
+            }
+        }
         if !self.restart(travel, saved, back, None, Outcome::Restarted)? {
             return Ok(false);
         }
@@ -465,7 +526,13 @@ impl Case<'_> {
         let criteria = self.criteria();
         let first = travel.first_sample;
         let found = if self.reads_loop() {
-            events::detect(&self.report.series, first, travel.way, &criteria, self.stage)
+            events::detect(
+                &self.report.series,
+                (first, self.quiet_from(travel)),
+                travel.way,
+                &criteria,
+                self.stage,
+            )
         } else if travel.way.0 > 0.0 {
             self.snap_watch(first)
                 .and_then(|from| events::detect_snap(&self.report.series, from, &criteria, self.stage))
@@ -482,6 +549,16 @@ impl Case<'_> {
             self.record(reported);
         }
         found
+    }
+
+    /// The first sample taken at the current slow phase's pace: after a
+    /// restart, the first since its checkpoint (the fast approach's before it
+    /// are no baseline for its kinetic energy); otherwise the stage's first.
+    fn quiet_from(&self, travel: &Travel) -> usize {
+        match (travel.phase, travel.restored_at) {
+            (Phase::Snap | Phase::Fallback | Phase::After, Some(i)) => i + 1,
+            _ => travel.first_sample,
+        }
     }
 
     /// Whether the knot's events are read on its loop's height H bar: the

@@ -171,7 +171,7 @@ fn bend_cases_are_checked_naming_the_field() {
     assert!(reef.validate().is_ok(), "{:?}", reef.validate());
     assert_eq!(reef.knot_label(), "reef");
     assert_eq!(reef.rest_length(), 2.0 * reef.length);
-    assert_eq!(reef.tight_force_bar(), Some(solver::case::BEND_TIGHT_FORCE_BAR));
+    assert_eq!(reef.tight_force_bar(), solver::case::BEND_TIGHT_FORCE_BAR);
     let field = |p: CaseParams| p.validate().unwrap_err()[0].field.clone();
     assert_eq!(field(CaseParams { n: 4, ..reef.clone() }), "n");
     assert_eq!(

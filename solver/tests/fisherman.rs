@@ -111,7 +111,7 @@ fn the_fisherman_is_a_bend_case() {
     assert!(params.validate().is_ok(), "{:?}", params.validate());
     assert_eq!(params.knot_label(), "fisherman");
     assert_eq!(params.rest_length(), 2.0 * params.length);
-    assert_eq!(params.tight_force_bar(), Some(solver::case::BEND_TIGHT_FORCE_BAR));
+    assert_eq!(params.tight_force_bar(), solver::case::BEND_TIGHT_FORCE_BAR);
     let field = |p: CaseParams| p.validate().unwrap_err()[0].field.clone();
     assert_eq!(field(CaseParams { n: 4, ..params }), "n");
 }

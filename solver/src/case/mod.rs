@@ -104,6 +104,16 @@ impl KnotKind {
 /// `max_force_bar` is not given (neither has an inversion, and their free
 /// tails keep their own length from the stopping rule `min_l_k_bar`).
 pub const BEND_TIGHT_FORCE_BAR: f64 = 0.05;
+/// F bar at which any other knot's tightening stops when `max_force_bar` is
+/// not given: its rod stretched by a quarter (strain F bar / 4, EA / EI = 4 /
+/// h^2), far past its linear elasticity. A knot that locks above
+/// `min_l_k_bar` in its own length would otherwise be pulled on without end,
+/// its rod stretching, since its own length cannot reach it; one held by
+/// friction gives nothing until it slides (the paper's rod n = 6 at mu = 0.5
+/// holds its own length from F bar 0.14 to 0.59 before it slides on, `knotsweep
+/// run --n 6 --mu 0.5 --max-force-bar 10`), so that no rule on its give tells
+/// a locked knot from a stuck one.
+pub const STRETCH_LIMIT_FORCE_BAR: f64 = 1.0;
 /// Largest node count K.
 pub const MAX_NODES: usize = 4001;
 /// h >= L / this: with edges of at most 4h ([`crate::knot::build`]) and at most
@@ -269,11 +279,13 @@ impl CaseParams {
     }
 
     /// F bar above which a tightening stops, the knot tight:
-    /// `max_force_bar`, or [`BEND_TIGHT_FORCE_BAR`] for a bend or a hitch.
-    pub fn tight_force_bar(&self) -> Option<f64> {
+    /// `max_force_bar`, or [`BEND_TIGHT_FORCE_BAR`] for a bend or a hitch,
+    /// [`STRETCH_LIMIT_FORCE_BAR`] for any other knot.
+    pub fn tight_force_bar(&self) -> f64 {
         match (self.max_force_bar, self.knot.holds_by_friction()) {
-            (None, true) => Some(BEND_TIGHT_FORCE_BAR),
-            (given, _) => given,
+            (Some(given), _) => given,
+            (None, true) => BEND_TIGHT_FORCE_BAR,
+            (None, false) => STRETCH_LIMIT_FORCE_BAR,
         }
     }
 
@@ -593,7 +605,8 @@ mod tests {
         let valid = hitch.validated().unwrap();
         let cylinder = valid.start().cylinder.expect("a hitch has its cylinder");
         assert_eq!(cylinder.radius, 10.0 * hitch.h);
-        assert_eq!(hitch.tight_force_bar(), Some(BEND_TIGHT_FORCE_BAR));
+        assert_eq!(hitch.tight_force_bar(), BEND_TIGHT_FORCE_BAR);
+        assert_eq!(CaseParams::default().tight_force_bar(), STRETCH_LIMIT_FORCE_BAR);
         assert_eq!(hitch.rest_length(), hitch.length);
         let given = CaseParams {
             cylinder_radius: Some(0.02),

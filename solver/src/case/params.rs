@@ -575,8 +575,7 @@ pub const PARAMETERS: &[Parameter] = &[
         null: None,
         paper: "",
         doc: "Stop when the knot's own length l_k arc bar, (arc length - l_c) / h (l_k bar less the rod's stretch), \
-              falls below this, or, without max_force_bar, where the knot is tight (its own length gives less than 5 \
-              while F bar rises by 0.1).",
+              falls below this.",
         value: |p| Some(Value::Number(p.min_l_k_bar)),
     },
     Parameter {
@@ -596,7 +595,7 @@ pub const PARAMETERS: &[Parameter] = &[
         unit: "",
         default: "null",
         range: Range::Interval(Bound::Open(0.0), Bound::Open(f64::INFINITY)),
-        null: Some("never"),
+        null: Some("a bend's or a hitch's 0.05; any other knot's 1, its rod stretched by a quarter"),
         paper: "",
         doc: "Stop when F bar exceeds this (the knot is tight).",
         value: |p| p.max_force_bar.map(Value::Number),

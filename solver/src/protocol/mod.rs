@@ -9,8 +9,8 @@
 //! `sample_interval` of eq. 11's l_k bar (the clamps' travel), and events are
 //! detected over windows of it, as the paper's Fig. 5 reads them; the
 //! stopping rules (`min_l_k_bar`, `stop_after_inversion`, the stages'
-//! `to_l_k_bar`, a knot pulled tight) and the adaptive schedule's windows
-//! act on the knot's own length l_k arc bar, which the tails' elastic stretch does not move, so that
+//! `to_l_k_bar`) and the adaptive schedule's windows act on the knot's own
+//! length l_k arc bar, which the tails' elastic stretch does not move, so that
 //! a rod longer than its knot stops, and restarts, where the paper's rod would
 //! (eq. 11's l_k bar of a rubber rod of L/h = 2000 trails it by 30 radii at
 //! F bar 0.06).
@@ -19,7 +19,6 @@
 //! - `adaptive.rs`: the adaptive schedule of a pull or release ([`Phase`]);
 //! - `runner.rs`: the run itself, relaxation and the program's walk;
 //! - `travel.rs`: a pull, release or soft stage; `still.rs`: hold and rotate;
-//!   `tight.rs`: a knot pulled tight;
 //! - `events.rs`: inversions and flips back; `snapshots.rs`: the states kept
 //!   for viewers; `twist.rs`: the linking number and the clamps' turns.
 mod adaptive;
@@ -28,7 +27,6 @@ mod report;
 mod runner;
 mod snapshots;
 mod still;
-mod tight;
 mod travel;
 mod twist;
 

@@ -4,8 +4,8 @@
 //! stops where the knot's own length l_k arc bar reaches the stage's target or
 //! the stopping rules (a rod longer than its knot stops where the paper's rod
 //! would, its tails' stretch aside); events are detected in the stage's own
-//! samples; a tightening without a target or a force to stop at also stops
-//! where the knot is tight ([`super::tight`]); the adaptive schedule
+//! samples; a tightening also stops at its force
+//! ([`crate::case::CaseParams::tight_force_bar`]); the adaptive schedule
 //! ([`super::adaptive`]) runs pulls and releases fast far from them.
 use super::adaptive::{
     self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
@@ -15,7 +15,6 @@ use super::events;
 use super::report::{Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer, Tails};
 use super::snapshots::SnapshotPlan;
-use super::tight;
 use crate::case::{Direction, KnotKind, LoadStage};
 use crate::pipeline::World;
 use crate::rod::{End, Spring, node_dof};
@@ -139,15 +138,13 @@ impl Case<'_> {
             if self.schedule(&mut travel, &mut saved, l_k_bar, arc)? {
                 continue;
             }
-            let tight = way.0 > 0.0
-                && match self.params.tight_force_bar() {
-                    Some(max) => sample.f_bar > max,
-                    None => target.is_none() && tight::is_tight(&self.report.series[travel.first_sample..]),
-                };
+            let tight = way.0 > 0.0 && sample.f_bar > self.params.tight_force_bar();
+            let overstretched =
+                tight && self.params.max_force_bar.is_none() && !self.params.knot.holds_by_friction();
             let easing = matches!(self.carried.tails, Tails::Easing { .. });
             if (way.reached(arc, stop) || tight)
                 && !easing
-                && !self.review_end(&mut travel, &mut saved, arc, tight.then_some(l_k_bar))?
+                && !self.review_end(&mut travel, &mut saved, arc, overstretched.then_some(l_k_bar))?
             {
                 break Ok(());
             }
@@ -390,9 +387,10 @@ impl Case<'_> {
     /// last `END_REVIEW` of the stage (the knot's own length, from `arc`)
     /// from a checkpoint, once, slowly to the end (returns `true`); not when
     /// a slow phase went through most of it (refuted within `END_REVIEW` of
-    /// the end). A knot stopped tight at `tight` (l_k bar) redoes at most the
-    /// last `END_REVIEW` of the clamps' travel: locked, it gives little of
-    /// its own length to a long travel.
+    /// the end). A knot stopped at the rod's stretch limit at `tight` (l_k
+    /// bar, [`crate::case::STRETCH_LIMIT_FORCE_BAR`]) redoes at most the last
+    /// `END_REVIEW` of the clamps' travel: locked, it gives little of its own
+    /// length to a long travel.
     fn review_end(
         &mut self,
         travel: &mut Travel,

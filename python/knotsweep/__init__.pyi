@@ -304,8 +304,8 @@ def run(
           stretch), falls below this. Range: [0, 1e6]. Default: 60.0.
       stop_after_inversion: Stop this far past a detected inversion, in the knot's own length l_k arc bar.
           Range: null or [0, 1e6]. null: never early. Default: 10.0.
-      max_force_bar: Stop when F bar exceeds this (the knot is tight). Range: null or > 0. null: never.
-          Default: null.
+      max_force_bar: Stop when F bar exceeds this (the knot is tight). Range: null or > 0. null: a bend's or a
+          hitch's 0.05; any other knot's 1, its rod stretched by a quarter. Default: null.
       loading: The loading program: the stages the clamps go through after the knot has relaxed, in order,
           each an object with one key. {"pull": {"to_l_k_bar": X}} tightens at pull_speed to X (null X: to the
           stopping rules min_l_k_bar, stop_after_inversion and max_force_bar); {"release": {"to_l_k_bar": X}}

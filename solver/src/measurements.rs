@@ -395,8 +395,10 @@ pub struct InversionCriteria {
     /// A loop whose H bar stays below this within the window has no fall to
     /// read: it is flat, and its H bar is the contacts' noise (n = 5 at L/h
     /// 2500, mu = 0.2, after its loop collapsed: 0.031 -> 0.015 at F bar 0.40;
-    /// the paper's rod n = 6: 0.004). Every snap measured begins from 0.186 or
-    /// more (docs/FIDELITY.md).
+    /// the paper's rod n = 6: 0.004). The loops that snap stand higher: over
+    /// the 133 runs of BENCHMARKS.md's map (physics revision 21), H bar within
+    /// the window before the inversion peaks at 0.141 or more (n = 6, the
+    /// lowest loops).
     pub flat_loop: f64,
 }
 

@@ -281,10 +281,10 @@ impl Case<'_> {
                 self.enter(travel, Phase::After);
             }
             (Phase::Snap, None)
-                if self.fell_flat(travel)
-                    && travel
-                        .fast_event
-                        .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
+                if travel
+                    .fast_event
+                    .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM)))
+                    && self.fell_flat(travel) =>
             {
                 // The loop fell flat without a snap the detector read: the
                 // restart came too close to the fold for the kinetic energy's

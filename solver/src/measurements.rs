@@ -393,12 +393,13 @@ pub struct InversionCriteria {
     /// confirms already.
     pub knot_jump: f64,
     /// A loop whose H bar stays below this within the window has no fall to
-    /// read: it is flat, and its H bar is the contacts' noise (n = 5 at L/h
-    /// 2500, mu = 0.2, after its loop collapsed: 0.031 -> 0.015 at F bar 0.40;
-    /// the paper's rod n = 6: 0.004). The loops that snap stand higher: over
-    /// the 133 runs of BENCHMARKS.md's map (physics revision 21), H bar within
-    /// the window before the inversion peaks at 0.141 or more (n = 6, the
-    /// lowest loops).
+    /// read: it is flat, and its H bar is the contacts' noise (the paper's rod
+    /// n = 6 once its loop has collapsed: about 0.03, under 0.04, over the
+    /// samples after its inversion, `knotsweep run --n 6`; what older
+    /// revisions read as inversions there is in CHANGELOG.md, physics revision
+    /// 21). The loops that snap stand higher: over the 133 runs of
+    /// BENCHMARKS.md's map (physics revision 21), H bar within the window
+    /// before the inversion peaks at 0.141 or more (n = 6, the lowest loops).
     pub flat_loop: f64,
 }
 

@@ -43,6 +43,9 @@ pub fn run(args: Args) -> Result<()> {
     let case = crate::run::validated(&stopped)?;
     let mut shots: Vec<Snapshot> = Vec::new();
     let report = protocol::run_observed(&case, &mut |p, points| {
+        if p.steps == 0 {
+            return true; // the relaxation: no view is taken before the pull
+        }
         let l_c_over_l = 1.0 - p.l_k_bar * params.h / params.length;
         while shots.len() < targets.len() && l_c_over_l >= targets[shots.len()] {
             shots.push(Snapshot {

@@ -59,7 +59,8 @@ pub fn work_estimate(params: &CaseParams) -> f64 {
 /// Runs one case: validates `params`, building the start shape once, and
 /// runs it ([`run_valid`]); invalid parameters give a report with
 /// [`Status::Invalid`] and the reasons. `observer` sees progress after every
-/// sample and returns `false` to cancel.
+/// sample and, during the relaxation, every few dozen steps (with no pull
+/// steps yet), and returns `false` to cancel.
 ///
 /// A short rod with one pass, pulled quickly at a constant speed (the
 /// reference protocol: no stage goes back) until the knot's own length
@@ -79,8 +80,8 @@ pub fn work_estimate(params: &CaseParams) -> f64 {
 ///     ..CaseParams::default()
 /// };
 /// let mut samples = 0;
-/// let report = protocol::run(&params, &mut |_| {
-///     samples += 1;
+/// let report = protocol::run(&params, &mut |p| {
+///     samples += usize::from(p.steps > 0); // not the relaxation's calls
 ///     true
 /// });
 /// assert_eq!(report.status, Status::Completed, "{}", report.reason);
@@ -111,7 +112,7 @@ pub fn run_valid(case: &ValidCase, observer: &mut dyn FnMut(&Progress) -> bool) 
 }
 
 /// [`run_valid`] with the rod's centre line (node positions) handed to the
-/// observer with every sample's progress.
+/// observer with every progress report.
 pub fn run_observed(
     case: &ValidCase,
     observer: &mut dyn FnMut(&Progress, &[Vector3<f64>]) -> bool,
@@ -143,5 +144,21 @@ mod tests {
         }
         assert_eq!(Phase::Settle.to_string(), "settle");
         assert_eq!(serde_json::to_value(Phase::Approach).unwrap(), "approach");
+    }
+
+    /// A cancel is seen during the relaxation, which takes no samples: the
+    /// observer is asked after the first `RELAX_OBSERVED` steps, with the
+    /// progress at 0, and the case ends there.
+    #[test]
+    fn a_cancel_stops_the_relaxation() {
+        let mut calls = Vec::new();
+        let report = super::run(&crate::case::CaseParams::default(), &mut |p| {
+            calls.push((p.fraction, p.steps));
+            false
+        });
+        assert_eq!(report.status, Status::Cancelled, "{}", report.reason);
+        assert_eq!(calls, [(0.0, 0)]);
+        assert_eq!(report.stats.relax_steps, super::runner::RELAX_OBSERVED);
+        assert!(report.series.is_empty());
     }
 }

@@ -320,7 +320,8 @@ impl PhaseSpan {
     }
 }
 
-/// Progress handed to the caller after every sample.
+/// Progress handed to the caller after every sample and during the
+/// relaxation (`steps` 0: no pull steps yet).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Progress {
     /// Fraction of the program done (0..1): stages done, and within a stage

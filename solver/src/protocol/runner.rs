@@ -61,9 +61,13 @@ const MAX_PENETRATION: f64 = 0.5;
 const STEP_HINT: &str = "a smaller dt, adaptive_dt, more nodes or contact_solve \"implicit\" may hold it";
 /// Snapshots kept around the newest sample for those around an event.
 pub(super) const SNAPSHOT_HISTORY: usize = 40;
+/// Relaxation steps between the observer's calls: the relaxation takes no
+/// samples, and a pause or cancel must not wait for its end (thousands of
+/// steps on a long rod).
+pub(super) const RELAX_OBSERVED: u64 = 50;
 
-/// The observer of a run: progress and the centre line after every sample;
-/// `false` cancels.
+/// The observer of a run: progress and the centre line after every sample
+/// and every `RELAX_OBSERVED` steps of the relaxation; `false` cancels.
 pub(super) type Observer<'o> = dyn FnMut(&Progress, &[Vector3<f64>]) -> bool + 'o;
 
 /// Runs a validated case from `started`: build, relax, walk the program,
@@ -80,7 +84,7 @@ pub(super) fn run(case: &ValidCase, started: Instant, observer: &mut Observer) -
         }
     };
     let mut run = Case::new(params, report, world, case.start(), started);
-    let ending = run.relax().and_then(|()| run.program(observer));
+    let ending = run.relax(observer).and_then(|()| run.program(observer));
     run.finish(ending.err().unwrap_or(Ending {
         status: Status::Completed,
         reason: String::new(),
@@ -608,13 +612,13 @@ impl<'a> Case<'a> {
     /// long straight tails let the knot drift sideways in a soft, slowly damped
     /// mode (L/h = 2500: 3 070 relaxing steps at the case's step, 1 150 at the
     /// settling's).
-    fn relax(&mut self) -> Result<(), Ending> {
+    fn relax(&mut self, observer: &mut Observer) -> Result<(), Ending> {
         self.begin(Phase::Settle, None);
         let spec = self.params.knot_spec();
         if self.params.adaptive_dt && spec.knot_length() < spec.length {
             self.clock.rescale(Phase::Settle.dt_max(self.params.time_step()));
         }
-        self.settle(self.params.relax_limit())?;
+        self.settle(self.params.relax_limit(), Some(observer))?;
         let points = self.world.rods[0].positions();
         self.topology(&points, || "after relaxing".to_string())?;
         self.snapshot_now(SnapshotLabel::Relaxed);
@@ -622,8 +626,13 @@ impl<'a> Case<'a> {
     }
 
     /// Damped steps with the clamps held until the kinetic energy is a
-    /// `relax_tolerance` fraction of the elastic energy, or for `max_time`.
-    pub(super) fn settle(&mut self, max_time: f64) -> Result<(), Ending> {
+    /// `relax_tolerance` fraction of the elastic energy, or for `max_time`;
+    /// `observer` is called every `RELAX_OBSERVED` steps.
+    pub(super) fn settle(
+        &mut self,
+        max_time: f64,
+        mut observer: Option<&mut Observer>,
+    ) -> Result<(), Ending> {
         let mut settled_for = 0.0;
         while settled_for < max_time {
             let step = self
@@ -635,6 +644,12 @@ impl<'a> Case<'a> {
             self.carried.twist.step(&self.world.rods[0]);
             self.count_step(&step.report);
             self.penetration(step.report.max_penetration, || "while relaxing".to_string())?;
+            if let Some(observer) = observer.as_deref_mut() {
+                if self.report.stats.relax_steps % RELAX_OBSERVED == 0 {
+                    let points = self.world.rods[0].positions();
+                    self.observe(observer, &points, self.l_k_bar(), 0.0)?;
+                }
+            }
             let ke = self.kinetic_energy();
             if ke <= self.params.relax_tolerance * step.report.energies.total() {
                 break;

@@ -500,7 +500,7 @@ impl Case<'_> {
         self.report.snapshots.truncate(c.snapshots);
         self.report.events.truncate(c.events);
         self.enter(travel, Phase::Settle);
-        self.settle(SETTLE_TIME * self.scales.time_unit)?;
+        self.settle(SETTLE_TIME * self.scales.time_unit, None)?;
         let slow = if restarts < MAX_RESTARTS {
             Phase::Snap
         } else {

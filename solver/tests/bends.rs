@@ -346,3 +346,31 @@ fn the_sampling_does_not_move_where_a_bend_is_set_and_let_go() {
         "set and let go (l_k bar, s) at sample intervals 0.5 and 0.25"
     );
 }
+
+/// The adaptive pull reads a bend's holding force as the reference pull
+/// does: it goes back to before the set and pulls through the setting's
+/// end, the release and the holding point at `pull_speed`. The reef at mu =
+/// 0.2 (K = 301) holds 0.00373 against the reference pull's 0.00377 (the
+/// fast approach's own reading, before physics revision 22: 0.00367).
+#[test]
+fn the_adaptive_pull_reads_a_bends_holding_force_as_the_reference_pull() {
+    let hold = |protocol| {
+        let params = CaseParams {
+            knot: KnotKind::Reef,
+            mu: 0.2,
+            protocol,
+            ..CaseParams::default()
+        };
+        let report = completed(&params);
+        assert_eq!(report.tied, Some(false), "the reef at mu = 0.2 comes undone");
+        report.holding_force_bar.expect("a holding force")
+    };
+    let (adaptive, reference) = (
+        hold(solver::case::Protocol::Adaptive),
+        hold(solver::case::Protocol::Reference),
+    );
+    assert!(
+        (adaptive / reference - 1.0).abs() <= 0.02,
+        "holding force: adaptive {adaptive}, reference {reference}"
+    );
+}

@@ -95,6 +95,20 @@ const FAST_CONTACT_TOLERANCE: f64 = 1e-4;
 /// shakes the knot), the phase after the event over `RAMP_AFTER`.
 const RAMP: f64 = 4.0;
 const RAMP_AFTER: f64 = 2.0;
+/// A slow phase through a bend's holding point goes fast again once F bar
+/// has fallen to this fraction of the holding force, `SLOW_AFTER` past it:
+/// the rods are coming apart (the reef at mu = 0.2 falls from 0.0036 to
+/// nothing), where a sliding bend holds on at most of it (mu = 0.3, K =
+/// 301, the reference pull: 0.0088 ... 0.0101 after 0.0122).
+pub(super) const LET_GO: f64 = 0.25;
+/// How far (the knot's own length) before a bend is set the fast approach
+/// anchors the checkpoint that a restart for its holding point goes back to:
+/// the holding force hangs on how the bend was set. The reef at K = 301
+/// (`knotsweep run --knot reef --mu 0.2`, `--mu 0.3`) holds 0.00357 and
+/// 0.01120 from the last checkpoint before its set, 0.00375 and 0.01140
+/// from 8 before, 0.00373 and 0.01225 from 16 before, against the reference
+/// pull's 0.00377 and 0.01217 (CHANGELOG.md, physics revision 22).
+pub(super) const SET_LEAD: f64 = 16.0;
 /// Longest settling (s, in the case's time unit) after going back to a
 /// checkpoint.
 pub(super) const SETTLE_TIME: f64 = 0.5;
@@ -190,6 +204,12 @@ impl Phase {
             Phase::Reference | Phase::Fallback | Phase::Snap | Phase::Hold | Phase::Rotate => case,
             Phase::Settle | Phase::Approach | Phase::After => case.max(relax),
         }
+    }
+
+    /// Whether the clamps move at `pull_speed` (or are held) in it, as in
+    /// the reference pull.
+    pub(super) fn at_pull_speed(self) -> bool {
+        matches!(self, Phase::Reference | Phase::Snap | Phase::Fallback)
     }
 
     /// Whether the damping spares sliding along the centre line
@@ -363,11 +383,23 @@ pub(super) fn stretch_factor(series: &[Sample], tails: f64) -> f64 {
     1.0 / knot_share.clamp(1.0 / STRETCH_CAP, 1.0)
 }
 
+/// Where a restart goes back to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Back {
+    /// The latest checkpoint at or before this knot's own length.
+    Before(f64),
+    /// The anchor ([`Checkpoints::anchor_at`]).
+    Anchor,
+}
+
 /// A fast approach's checkpoints of state `T`, each with the knot's own
 /// length where it was taken, and where (l_k bar) the next is due.
 pub(super) struct Checkpoints<T> {
     pub(super) list: VecDeque<(f64, T)>,
     pub(super) next: f64,
+    /// The first in the list is an anchor ([`Checkpoints::anchor`]) that
+    /// later checkpoints do not push out.
+    anchored: bool,
 }
 
 impl<T> Checkpoints<T> {
@@ -375,26 +407,58 @@ impl<T> Checkpoints<T> {
         Self {
             list: VecDeque::with_capacity(CHECKPOINTS),
             next: start,
+            anchored: false,
         }
     }
 
     /// Keeps `state` taken at `l_k_bar`, the knot's own length `arc`,
-    /// dropping the oldest beyond `CHECKPOINTS`.
+    /// dropping the oldest but the anchor beyond `CHECKPOINTS`.
     pub(super) fn keep(&mut self, way: Way, l_k_bar: f64, arc: f64, state: T) {
         if self.list.len() == CHECKPOINTS {
-            self.list.pop_front();
+            self.list.remove(usize::from(self.anchored));
         }
         self.list.push_back((arc, state));
         self.next = way.on(l_k_bar, CHECKPOINT_SPACING);
     }
 
-    /// The latest checkpoint at or before the knot's own length `arc` along
-    /// the stage, else the earliest kept; it and the later ones leave the
-    /// list, the earlier ones stay for a retry from further back.
-    pub(super) fn before(&mut self, way: Way, arc: f64) -> Option<T> {
+    /// Makes the latest checkpoint at or before the knot's own length `arc`
+    /// (else the earliest) the anchor, dropping the earlier ones: a bend's
+    /// `SET_LEAD` before it is set, from which the end of the setting, the
+    /// tails' release and the holding point, however far the fast approach
+    /// slid past it, are pulled through again.
+    pub(super) fn anchor_at(&mut self, way: Way, arc: f64) {
         let at = (self.list.iter())
             .rposition(|(l, _)| way.reached(arc, *l))
             .unwrap_or(0);
+        self.list.drain(..at);
+        self.anchored = !self.list.is_empty();
+    }
+
+    /// Whether an anchor is kept.
+    pub(super) fn anchored(&self) -> bool {
+        self.anchored
+    }
+
+    /// The checkpoint `to` names; it and the later ones leave the list.
+    pub(super) fn back(&mut self, way: Way, to: Back) -> Option<T> {
+        match to {
+            Back::Before(arc) => self.before(way, arc),
+            Back::Anchor if self.anchored => {
+                self.anchored = false;
+                self.list.drain(..).next().map(|(_, state)| state)
+            }
+            Back::Anchor => None,
+        }
+    }
+
+    /// The latest checkpoint at or before the knot's own length `arc` along
+    /// the stage, else the earliest kept; it and the later ones leave the
+    /// list, the earlier ones stay for a retry from further back.
+    fn before(&mut self, way: Way, arc: f64) -> Option<T> {
+        let at = (self.list.iter())
+            .rposition(|(l, _)| way.reached(arc, *l))
+            .unwrap_or(0);
+        self.anchored &= at > 0;
         self.list.drain(at..).next().map(|(_, state)| state)
     }
 }
@@ -560,9 +624,41 @@ mod tests {
             }
             assert_eq!(saved.next, way.on(marks[2], CHECKPOINT_SPACING));
             // Back from just past the last mark: the second.
-            let l = saved.before(way, way.back(marks[2] + 5.0, 1.0)).unwrap();
+            let l = saved
+                .back(way, Back::Before(way.back(marks[2] + 5.0, 1.0)))
+                .unwrap();
             assert_eq!(l, marks[1]);
             assert_eq!(saved.list.len(), 1);
         }
+    }
+
+    /// An anchor outlasts any number of later checkpoints and is found
+    /// when the list no longer reaches back far enough; the others go
+    /// oldest first.
+    #[test]
+    fn an_anchor_outlasts_later_checkpoints() {
+        let way = Way(1.0);
+        let mut saved = Checkpoints::new(300.0);
+        saved.keep(way, 302.0, 302.0, 302.0);
+        saved.keep(way, 300.0, 300.0, 300.0);
+        saved.anchor_at(way, 300.5);
+        assert!(saved.anchored());
+        let marks: Vec<f64> = (1..=3 * CHECKPOINTS).map(|i| 300.0 - 2.0 * i as f64).collect();
+        for &m in &marks {
+            saved.keep(way, m, m, m);
+        }
+        assert_eq!(saved.list.len(), CHECKPOINTS);
+        assert_eq!(saved.list[0].1, 300.0);
+        assert_eq!(saved.list[1].1, marks[marks.len() - CHECKPOINTS + 1]);
+        // Found back to, the list emptied behind it.
+        assert_eq!(saved.back(way, Back::Anchor), Some(300.0));
+        assert!(saved.list.is_empty() && !saved.anchored());
+        assert_eq!(saved.back(way, Back::Anchor), None);
+        // Without an anchor, the oldest goes first.
+        let mut plain = Checkpoints::new(300.0);
+        for &m in &marks {
+            plain.keep(way, m, m, m);
+        }
+        assert_eq!(plain.list[0].1, marks[marks.len() - CHECKPOINTS]);
     }
 }

@@ -8,11 +8,11 @@
 //! ([`crate::case::CaseParams::tight_force_bar`]); the adaptive schedule
 //! ([`super::adaptive`]) runs pulls and releases fast far from them.
 use super::adaptive::{
-    self, Checkpoints, END_REVIEW, FALSE_ALARM, MAX_RESTARTS, MIN_LEAD, Outcome, Phase, SETTLE_TIME,
-    SLOW_AFTER, Way,
+    self, Back, Checkpoints, END_REVIEW, FALSE_ALARM, LET_GO, MAX_RESTARTS, MIN_LEAD, Outcome, Phase,
+    SET_LEAD, SETTLE_TIME, SLOW_AFTER, Way,
 };
 use super::events;
-use super::report::{Event, EventKind};
+use super::report::{self, Event, EventKind};
 use super::runner::{Carried, Case, Ending, Observer, Tails};
 use super::snapshots::SnapshotPlan;
 use crate::case::{Direction, KnotKind, LoadStage};
@@ -48,6 +48,12 @@ pub(super) struct Travel {
     watch_from: usize,
     /// Restarts the stage has taken (carried over a restore).
     restarts: u32,
+    /// The slow phase pulls a bend or a hitch from before it was set through
+    /// its holding point, which the fast approach slid past, to where the
+    /// rods part or the stage ends: the fast pull neither reads the holding
+    /// force nor parts the rods where the reference pull does (the reef at
+    /// mu = 0.3, K = 301, slid on to l_k bar 60 still tied).
+    reads_hold: bool,
 }
 
 /// The state a fast approach can return to.
@@ -98,6 +104,7 @@ impl Case<'_> {
             reviewed: false,
             watch_from: first_sample,
             restarts: 0,
+            reads_hold: false,
         };
         self.enter(&mut travel, phase);
         let mut saved = Checkpoints::new(start);
@@ -108,6 +115,7 @@ impl Case<'_> {
             if self.is_bend() && way.0 > 0.0 {
                 let speed = travel.phase.speed(way.along(travel.phase_start, l_k_bar));
                 if self.ease(speed) {
+                    saved.anchor_at(way, way.back(self.l_k_arc_bar(), SET_LEAD));
                     travel.next_sample = self.moving(&travel).on(l_k_bar, self.params.sample_interval);
                 }
             }
@@ -166,7 +174,7 @@ impl Case<'_> {
 
     /// The set knot has been eased, sampled and its tails let go at
     /// `l_k_bar`: the pull goes on from here, its phase's speed ramping up
-    /// again and, while fast, checkpointed (a restart through the holding
+    /// again and, while fast, checkpointed (a restart after the holding
     /// point comes back to the tails free).
     fn pull_on(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>, l_k_bar: f64) {
         travel.phase_start = l_k_bar;
@@ -179,13 +187,16 @@ impl Case<'_> {
     }
 
     /// A bend's rods have parted at the last sample: a fast approach goes
-    /// back to a checkpoint before its holding point and pulls through it
-    /// slowly (returns `true`); otherwise the slip-through is recorded and
-    /// the stage ends (returns `false`).
+    /// back to the checkpoint before the bend was set (or, without one, to
+    /// one before its holding point) and pulls through the setting, the
+    /// release and the holding point slowly, to where the rods part again
+    /// or the stage ends (returns `true`); otherwise the slip-through is recorded and the stage ends (returns
+    /// `false`).
     fn slipped(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>) -> Result<bool, Ending> {
         let slip = events::slip_through(
             &self.report.series,
             &self.report.bend_series,
+            &self.sample_phases,
             travel.first_sample,
             self.stage,
         );
@@ -194,8 +205,9 @@ impl Case<'_> {
         };
         let held = slip.at.l_k_arc_bar;
         if travel.phase == Phase::Approach {
-            let back = travel.way.back(held, travel.way.restart_before(self.turns()));
-            if self.restart(travel, saved, back, Some(held), Outcome::Restarted)? {
+            let to = self.back_from(travel, saved, held);
+            if self.restart(travel, saved, to, Some(held), Outcome::Restarted)? {
+                travel.reads_hold = to == Back::Anchor;
                 return Ok(true);
             }
         }
@@ -206,6 +218,18 @@ impl Case<'_> {
             ..slip
         });
         Ok(false)
+    }
+
+    /// Where a fast approach goes back to for its event at the knot's own
+    /// length `at`: a set bend's or hitch's anchor, to be pulled through its
+    /// setting, release and holding point at `pull_speed`
+    /// ([`Travel::reads_hold`]; its snaps with the tails free are its giving
+    /// way), else `restart_before` before `at`.
+    fn back_from(&self, travel: &Travel, saved: &Checkpoints<Checkpoint>, at: f64) -> Back {
+        if saved.anchored() {
+            return Back::Anchor;
+        }
+        Back::Before(travel.way.back(at, travel.way.restart_before(self.turns())))
     }
 
     /// Where (the knot's own length) the current stage stops: its target; a
@@ -236,21 +260,34 @@ impl Case<'_> {
         arc: f64,
     ) -> Result<bool, Ending> {
         let way = travel.way;
+        if travel.reads_hold && travel.phase.at_pull_speed() {
+            if self.letting_go(travel) {
+                self.end_phase(Outcome::Confirmed);
+                self.enter(travel, Phase::After);
+            } else {
+                self.drive(travel, l_k_bar);
+            }
+            return Ok(false);
+        }
         if travel.phase == Phase::Approach && travel.event.is_none() && way.0 > 0.0 && self.reads_loop() {
             if let Some((began, fell)) = adaptive::smeared_snap(
                 &self.report.series[travel.watch_from..],
                 self.criteria().flat_loop,
             ) {
                 let back = way.back(began, way.restart_before(self.turns()));
-                if self.restart(travel, saved, back, Some(fell), Outcome::Restarted)? {
+                if self.restart(travel, saved, Back::Before(back), Some(fell), Outcome::Restarted)? {
                     return Ok(true);
                 }
             }
         }
         match (travel.phase, travel.event) {
             (Phase::Approach, Some(event)) => {
-                let (at, back) = (event.at.l_k_arc_bar, way.restart_before(self.turns()));
-                if self.restart(travel, saved, way.back(at, back), Some(at), Outcome::Restarted)? {
+                let (at, to) = (
+                    event.at.l_k_arc_bar,
+                    self.back_from(travel, saved, event.at.l_k_arc_bar),
+                );
+                if self.restart(travel, saved, to, Some(at), Outcome::Restarted)? {
+                    travel.reads_hold = to == Back::Anchor;
                     return Ok(true);
                 }
             }
@@ -270,7 +307,7 @@ impl Case<'_> {
                     way.back(from, way.restart_before(self.turns())),
                     travel.fast_event,
                 );
-                if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
+                if self.restart(travel, saved, Back::Before(back), fast, Outcome::TooLate)? {
                     return Ok(true);
                 }
             }
@@ -293,7 +330,7 @@ impl Case<'_> {
                     way.back(travel.phase_start_arc, way.restart_before(self.turns())),
                     travel.fast_event,
                 );
-                if self.restart(travel, saved, back, fast, Outcome::TooLate)? {
+                if self.restart(travel, saved, Back::Before(back), fast, Outcome::TooLate)? {
                     return Ok(true);
                 }
                 self.refute(travel, saved, l_k_bar);
@@ -328,6 +365,18 @@ impl Case<'_> {
         saved.next = l_k_bar;
     }
 
+    /// Whether the slow phase through a bend's holding point sees its rods
+    /// coming apart: `SLOW_AFTER` past its largest F bar with the tails free,
+    /// F bar has fallen to `LET_GO` of it.
+    fn letting_go(&self, travel: &Travel) -> bool {
+        let (series, from) = (&self.report.series, self.quiet_from(travel));
+        let held = report::holding_point(series, &self.report.bend_series, &self.sample_phases, from);
+        held.zip(series.last()).is_some_and(|((_, held), last)| {
+            travel.way.along(held.l_k_arc_bar, last.l_k_arc_bar) >= SLOW_AFTER
+                && last.f_bar <= LET_GO * held.f_bar
+        })
+    }
+
     /// Whether an overhand knot's loop fell flat in the current phase: its
     /// H bar rose to `flat_loop` or above in it
     /// ([`crate::measurements::InversionCriteria::flat_loop`]) and lies below
@@ -360,21 +409,21 @@ impl Case<'_> {
         }
     }
 
-    /// Back to the latest checkpoint at or before `before` (the knot's own
-    /// length), the fast pull's event at `fast_event`, ending the current
+    /// Back to the checkpoint `to` names, the fast pull's event at
+    /// `fast_event`, ending the current
     /// phase with `outcome`; `false` when no checkpoint or no restart is left.
     fn restart(
         &mut self,
         travel: &mut Travel,
         saved: &mut Checkpoints<Checkpoint>,
-        before: f64,
+        to: Back,
         fast_event: Option<f64>,
         outcome: Outcome,
     ) -> Result<bool, Ending> {
         if travel.restarts >= MAX_RESTARTS {
             return Ok(false);
         }
-        let Some(c) = saved.before(travel.way, before) else {
+        let Some(c) = saved.back(travel.way, to) else {
             return Ok(false);
         };
         self.end_phase(outcome);
@@ -384,8 +433,9 @@ impl Case<'_> {
     }
 
     /// At the stop condition: a fast approach without an event redoes the
-    /// last `END_REVIEW` of the stage (the knot's own length, from `arc`)
-    /// from a checkpoint, once, slowly to the end (returns `true`); not when
+    /// last `END_REVIEW` of the stage (the knot's own length, from `arc`),
+    /// a bend or a hitch that held most before that from the checkpoint
+    /// before it was set, once, slowly to the end (returns `true`); not when
     /// a slow phase went through most of it (refuted within `END_REVIEW` of
     /// the end). A knot stopped at the rod's stretch limit at `tight` (l_k
     /// bar, [`crate::case::STRETCH_LIMIT_FORCE_BAR`]) redoes at most the last
@@ -415,10 +465,19 @@ impl Case<'_> {
                 back = travelled.l_k_arc_bar;
             }
         }
-        if !self.restart(travel, saved, back, None, Outcome::Restarted)? {
+        // A bend or a hitch that held most before the redone stretch: from
+        // before it was set, to read its holding force at pull_speed.
+        let hold = saved.anchored() && {
+            let (series, bend) = (&self.report.series, &self.report.bend_series);
+            report::holding_point(series, bend, &self.sample_phases, travel.first_sample)
+                .is_some_and(|(_, s)| way.along(s.l_k_arc_bar, back) > 0.0)
+        };
+        let to = if hold { Back::Anchor } else { Back::Before(back) };
+        if !self.restart(travel, saved, to, None, Outcome::Restarted)? {
             return Ok(false);
         }
         travel.reviewed = true;
+        travel.reads_hold = hold;
         Ok(true)
     }
 

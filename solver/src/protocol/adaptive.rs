@@ -30,6 +30,14 @@
 //! event, whence the approach goes on fast, its next event with restarts of
 //! its own and no checkpoint before the stretch.
 //!
+//! A set bend or hitch is read at `pull_speed` from before its set: its fast
+//! approach anchors the checkpoint `SET_LEAD` before it, and when it sees the
+//! bend give way (a snap of F bar with the tails free, the rods parted, or
+//! the stage's end past its largest F bar) it goes back there and pulls
+//! through the release and the holding point slowly, to where the rods part
+//! or the stage ends, fast again once F bar has fallen to `LET_GO` of the
+//! holding force.
+//!
 //! On a rod longer than its knot the slow phases also move the clamps by
 //! what the straight tails' elastic stretch takes up ([`stretch_factor`]),
 //! so that the knot is pulled at the paper's rod's pace: at F bar 0.17 a
@@ -638,20 +646,23 @@ mod tests {
     #[test]
     fn an_anchor_outlasts_later_checkpoints() {
         let way = Way(1.0);
-        let mut saved = Checkpoints::new(300.0);
-        saved.keep(way, 302.0, 302.0, 302.0);
-        saved.keep(way, 300.0, 300.0, 300.0);
-        saved.anchor_at(way, 300.5);
+        let mut saved = Checkpoints::new(304.0);
+        for m in [304.0, 302.0, 300.0] {
+            saved.keep(way, m, m, m);
+        }
+        // The latest at or before 301: 302, the earlier dropped.
+        saved.anchor_at(way, 301.0);
         assert!(saved.anchored());
+        assert_eq!(saved.list.iter().map(|c| c.1).collect::<Vec<_>>(), [302.0, 300.0]);
         let marks: Vec<f64> = (1..=3 * CHECKPOINTS).map(|i| 300.0 - 2.0 * i as f64).collect();
         for &m in &marks {
             saved.keep(way, m, m, m);
         }
         assert_eq!(saved.list.len(), CHECKPOINTS);
-        assert_eq!(saved.list[0].1, 300.0);
+        assert_eq!(saved.list[0].1, 302.0);
         assert_eq!(saved.list[1].1, marks[marks.len() - CHECKPOINTS + 1]);
         // Found back to, the list emptied behind it.
-        assert_eq!(saved.back(way, Back::Anchor), Some(300.0));
+        assert_eq!(saved.back(way, Back::Anchor), Some(302.0));
         assert!(saved.list.is_empty() && !saved.anchored());
         assert_eq!(saved.back(way, Back::Anchor), None);
         // Without an anchor, the oldest goes first.

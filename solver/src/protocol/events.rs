@@ -3,7 +3,7 @@
 //! flipping back while it loosens ([`measurements::detect_flip_back`]); any
 //! other knot's snap while it tightens ([`detect_snap`]) and a bend's or a
 //! hitch's slip-through.
-use super::adaptive::{Phase, Way};
+use super::adaptive::Way;
 use super::report::{self, BendSample, Event, EventKind};
 use crate::case::Direction;
 use crate::measurements::{self, InversionCriteria, Reading, Sample};
@@ -105,11 +105,10 @@ pub(super) fn detect_snap(
 pub(super) fn slip_through(
     series: &[Sample],
     bend: &[BendSample],
-    phases: &[Phase],
     first: usize,
     stage: usize,
 ) -> Option<Event> {
-    let (i, held) = report::holding_point(series, bend, phases, first)?;
+    let (i, held) = report::holding_point(series, bend, first)?;
     let last = series[series.len() - 1];
     Some(Event {
         stage,
@@ -262,36 +261,5 @@ mod tests {
             |l| (279.0..281.0).contains(&l),
         );
         assert_eq!(detect_snap(&loop_only, 0, &criteria, 3), None);
-    }
-
-    /// A slip-through reads its holding force on the samples at
-    /// `pull_speed` with the tails free when there are such: a larger F bar
-    /// of the fast approach (its drag) or with the tails held (the setting
-    /// load) is not the bend's hold; without slow samples, on all.
-    #[test]
-    fn a_slip_through_holds_what_the_slow_pull_read() {
-        let f = [0.025, 0.004, 0.009, 0.006, 0.007, 0.0];
-        let free = [false, true, true, true, true, true];
-        let series: Vec<Sample> = (f.iter().enumerate())
-            .map(|(i, &f_bar)| Sample {
-                l_k_bar: 160.0 - i as f64,
-                f_bar,
-                ..Sample::default()
-            })
-            .collect();
-        let bend: Vec<BendSample> = (free.iter())
-            .map(|&tails_free| BendSample {
-                tails_free,
-                ..BendSample::default()
-            })
-            .collect();
-        let fast = [Phase::Approach; 6];
-        let slip = slip_through(&series, &bend, &fast, 0, 0).unwrap();
-        assert_eq!((slip.at.sample, slip.at.f_bar_before), (2, 0.009));
-        let mut mixed = fast;
-        mixed[3..].fill(Phase::Snap);
-        let slip = slip_through(&series, &bend, &mixed, 0, 0).unwrap();
-        assert_eq!((slip.at.sample, slip.at.f_bar_before), (4, 0.007));
-        assert_eq!(slip.at.f_bar_after, 0.0);
     }
 }

@@ -252,15 +252,14 @@ impl CaseReport {
     }
 
     /// A bend's outcome: still tied unless it slipped through, and its
-    /// holding force (the slip's, or where it held most in its series,
-    /// `phases` the phase each sample was taken in:
+    /// holding force (the slip's, or where it held most in its series:
     /// [`holding_point`]).
-    pub(super) fn close_bend(&mut self, phases: &[Phase]) {
+    pub(super) fn close_bend(&mut self) {
         let slip = self.events.iter().find(|e| e.kind == EventKind::SlipThrough);
         self.tied = Some(slip.is_none() && self.bend_series.last().is_none_or(|b| !b.apart));
         self.holding_force_bar = match slip {
             Some(e) => Some(e.at.f_bar_before),
-            None => holding_point(&self.series, &self.bend_series, phases, 0).map(|(_, s)| s.f_bar),
+            None => holding_point(&self.series, &self.bend_series, 0).map(|(_, s)| s.f_bar),
         };
     }
 
@@ -414,25 +413,18 @@ impl QuasiStatic {
 }
 
 /// Where a bend or a hitch held most among the samples of `series` from
-/// `first` (`bend` its own samples, `phases` the phase each was taken in):
-/// the index and sample of the largest F bar with the tails free. Read on
-/// the samples taken at `pull_speed` when there are such with the tails
-/// free (the adaptive pull's slow phase through the holding point), else on
-/// all: a fast phase's drag and lag are no holding force.
+/// `first` (`bend` its own samples): the index and sample of the largest F
+/// bar with the tails free. After the adaptive pull's restart for the
+/// holding point these are the slow phase's through it and, once the rods
+/// came apart, the fast pull's to where they part (a knot that grips again
+/// there, as the fisherman's jamming overhands, holds most there).
 pub(super) fn holding_point<'a>(
     series: &'a [Sample],
     bend: &[BendSample],
-    phases: &[Phase],
     first: usize,
 ) -> Option<(usize, &'a Sample)> {
-    let free = || {
-        (series.iter().zip(bend).zip(phases).enumerate().skip(first))
-            .filter(|(_, ((_, b), _))| b.tails_free)
-            .map(|(i, ((s, _), p))| (i, s, p.at_pull_speed()))
-    };
-    let slow = free().any(|(.., slow)| slow);
-    free()
-        .filter(|(.., at_pull_speed)| *at_pull_speed || !slow)
+    (series.iter().zip(bend).enumerate().skip(first))
+        .filter(|(_, (_, b))| b.tails_free)
+        .map(|(i, (s, _))| (i, s))
         .max_by(|a, b| a.1.f_bar.total_cmp(&b.1.f_bar))
-        .map(|(i, s, _)| (i, s))
 }

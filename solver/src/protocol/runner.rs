@@ -969,7 +969,7 @@ impl<'a> Case<'a> {
         report.reason = ending.reason;
         report.close_events();
         if bend {
-            report.close_bend(&sample_phases);
+            report.close_bend();
         }
         report.scaling = Some(Scaling::of(&report.params));
         report.quasi_static = QuasiStatic::of(&report, &sample_phases);

@@ -187,16 +187,13 @@ impl Case<'_> {
     }
 
     /// A bend's rods have parted at the last sample: a fast approach goes
-    /// back to the checkpoint before the bend was set (or, without one, to
-    /// one before its holding point) and pulls through the setting, the
-    /// release and the holding point slowly, to where the rods part again
-    /// or the stage ends (returns `true`); otherwise the slip-through is recorded and the stage ends (returns
-    /// `false`).
+    /// back ([`Case::back_from`]) and pulls through the holding point slowly
+    /// (returns `true`); otherwise the slip-through is recorded and the
+    /// stage ends (returns `false`).
     fn slipped(&mut self, travel: &mut Travel, saved: &mut Checkpoints<Checkpoint>) -> Result<bool, Ending> {
         let slip = events::slip_through(
             &self.report.series,
             &self.report.bend_series,
-            &self.sample_phases,
             travel.first_sample,
             self.stage,
         );
@@ -282,10 +279,8 @@ impl Case<'_> {
         }
         match (travel.phase, travel.event) {
             (Phase::Approach, Some(event)) => {
-                let (at, to) = (
-                    event.at.l_k_arc_bar,
-                    self.back_from(travel, saved, event.at.l_k_arc_bar),
-                );
+                let at = event.at.l_k_arc_bar;
+                let to = self.back_from(travel, saved, at);
                 if self.restart(travel, saved, to, Some(at), Outcome::Restarted)? {
                     travel.reads_hold = to == Back::Anchor;
                     return Ok(true);
@@ -370,7 +365,7 @@ impl Case<'_> {
     /// F bar has fallen to `LET_GO` of it.
     fn letting_go(&self, travel: &Travel) -> bool {
         let (series, from) = (&self.report.series, self.quiet_from(travel));
-        let held = report::holding_point(series, &self.report.bend_series, &self.sample_phases, from);
+        let held = report::holding_point(series, &self.report.bend_series, from);
         held.zip(series.last()).is_some_and(|((_, held), last)| {
             travel.way.along(held.l_k_arc_bar, last.l_k_arc_bar) >= SLOW_AFTER
                 && last.f_bar <= LET_GO * held.f_bar
@@ -410,8 +405,8 @@ impl Case<'_> {
     }
 
     /// Back to the checkpoint `to` names, the fast pull's event at
-    /// `fast_event`, ending the current
-    /// phase with `outcome`; `false` when no checkpoint or no restart is left.
+    /// `fast_event`, ending the current phase with `outcome`; `false` when
+    /// no checkpoint or no restart is left.
     fn restart(
         &mut self,
         travel: &mut Travel,
@@ -469,7 +464,7 @@ impl Case<'_> {
         // before it was set, to read its holding force at pull_speed.
         let hold = saved.anchored() && {
             let (series, bend) = (&self.report.series, &self.report.bend_series);
-            report::holding_point(series, bend, &self.sample_phases, travel.first_sample)
+            report::holding_point(series, bend, travel.first_sample)
                 .is_some_and(|(_, s)| way.along(s.l_k_arc_bar, back) > 0.0)
         };
         let to = if hold { Back::Anchor } else { Back::Before(back) };

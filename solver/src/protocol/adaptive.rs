@@ -405,7 +405,7 @@ pub(super) enum Back {
 pub(super) struct Checkpoints<T> {
     pub(super) list: VecDeque<(f64, T)>,
     pub(super) next: f64,
-    /// The first in the list is an anchor ([`Checkpoints::anchor`]) that
+    /// The first in the list is an anchor ([`Checkpoints::anchor_at`]) that
     /// later checkpoints do not push out.
     anchored: bool,
 }

@@ -181,6 +181,7 @@ def run(
     min_l_k_bar: float = 60.0,
     stop_after_inversion: float | None = 10.0,
     max_force_bar: float | None = None,
+    eased_force_bar: float | None = None,
     loading: Sequence[Mapping[str, Mapping[str, Any]]] | None = None,
     # Solver (advanced)
     contact_solve: Literal["explicit", "implicit"] = "explicit",
@@ -212,18 +213,18 @@ def run(
           determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends "reef",
           "granny", "thief", "grief" and "fisherman" (two overhand knots, each round the other rod) tie two
           rods of length L together, set them (the standing ends pulled apart to F bar 0.025 with the tails
-          held, then every end eased back to F bar 0.0025), let the tails go and pull the standing ends apart
-          until tight (max_force_bar, default 0.05) or until the rods slip apart, and report whether the rods
-          still hold each other and the holding force (the largest F bar before they part), with l_k bar = (2L
-          - the pulled clamps' distance) / h. "clove_hitch" ties the rod round a rigid, fixed cylinder of
-          radius cylinder_radius (frictional contact with the same mu), pulls its two ends apart, away from
-          the cylinder, until the hitch has set (F bar 0.025), eases both back to F bar 0.005, lets the tail
-          go with a weight of F bar 0.005 on it and pulls the standing end until tight (max_force_bar, default
-          0.05) or until the rod slips round the cylinder (less than one and a half turns left on it): tied
-          and holding_force_bar as for a bend, l_k bar = (L - the standing end's distance from where the tail
-          was held) / h; the report carries the cylinder. Range: "overhand" or "figure_eight" or "braid" or
-          "reef" or "granny" or "thief" or "grief" or "fisherman" or "clove_hitch". Default: "overhand".
-          Paper: "overhand".
+          held, then every end eased back to eased_force_bar, default F bar 0.0025), let the tails go and pull
+          the standing ends apart until tight (max_force_bar, default 0.05) or until the rods slip apart, and
+          report whether the rods still hold each other and the holding force (the largest F bar before they
+          part), with l_k bar = (2L - the pulled clamps' distance) / h. "clove_hitch" ties the rod round a
+          rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls its two
+          ends apart, away from the cylinder, until the hitch has set (F bar 0.025), eases both back to F bar
+          0.005, lets the tail go with a weight of F bar 0.005 on it and pulls the standing end until tight
+          (max_force_bar, default 0.05) or until the rod slips round the cylinder (less than one and a half
+          turns left on it): tied and holding_force_bar as for a bend, l_k bar = (L - the standing end's
+          distance from where the tail was held) / h; the report carries the cylinder. Range: "overhand" or
+          "figure_eight" or "braid" or "reef" or "granny" or "thief" or "grief" or "fisherman" or
+          "clove_hitch". Default: "overhand". Paper: "overhand".
       n: Number of passes (unknotting number) of the overhand knot; other knots have none (leave it out).
           Range: integer in 1..=8. Default: 3.
       braid_word: The braid whose closure knot "braid" ties: generators s1 ... s4 (s_i crosses strands i and i
@@ -306,6 +307,13 @@ def run(
           Range: null or [0, 1e6]. null: never early. Default: 10.0.
       max_force_bar: Stop when F bar exceeds this (the knot is tight). Range: null or > 0. null: a bend's or a
           hitch's 0.05; any other knot's 1, its rod stretched by a quarter. Default: null.
+      eased_force_bar: A bend's eased load: once set (F bar 0.025, its tails held) each of its four ends moves
+          back towards the knot, for at most 10 radii, while it pulls harder than this F bar; then the tails
+          are let go. Below the setting load; bends only (a hitch is eased to its tail's weight, F bar 0.005).
+          Easing loosens the set knot as well as unloading it, so the holding force of a bend that comes apart
+          soon after its release depends on it (docs/FIDELITY.md, Bends, "Convergence"). Range: null or (0,
+          0.025). null: 0.0025, a tenth of the setting load, for a bend; no easing for the other knots.
+          Default: null.
       loading: The loading program: the stages the clamps go through after the knot has relaxed, in order,
           each an object with one key. {"pull": {"to_l_k_bar": X}} tightens at pull_speed to X (null X: to the
           stopping rules min_l_k_bar, stop_after_inversion and max_force_bar); {"release": {"to_l_k_bar": X}}
@@ -406,6 +414,7 @@ def validate(
     min_l_k_bar: float = 60.0,
     stop_after_inversion: float | None = 10.0,
     max_force_bar: float | None = None,
+    eased_force_bar: float | None = None,
     loading: Sequence[Mapping[str, Mapping[str, Any]]] | None = None,
     # Solver (advanced)
     contact_solve: Literal["explicit", "implicit"] = "explicit",

@@ -374,3 +374,37 @@ fn the_adaptive_pull_reads_a_bends_holding_force_as_the_reference_pull() {
         "holding force: adaptive {adaptive}, reference {reference}"
     );
 }
+
+/// `eased_force_bar` sets how far a set bend is eased before its tails are
+/// let go: the reef (mu = 0.2) eased to F bar 0.001 lets its tails go under
+/// less than twice that (each end stops moving back once it pulls less; the
+/// sample averages the easing's last stretch), below the default's eased
+/// load, and further back (the ends have moved further towards the knot).
+#[test]
+fn a_bend_is_let_go_at_the_eased_load_it_is_given() {
+    let release = |eased_force_bar| {
+        let params = CaseParams {
+            knot: KnotKind::Reef,
+            mu: 0.2,
+            eased_force_bar,
+            ..CaseParams::default()
+        };
+        let report = completed(&params);
+        let freed = (report.bend_series.iter().position(|b| b.tails_free)).expect("the tails are let go");
+        report.series[freed - 1]
+    };
+    let (low, default) = (release(Some(0.001)), release(None));
+    assert!(low.f_bar < 0.002, "let go at F bar {}", low.f_bar);
+    assert!(
+        low.f_bar < default.f_bar,
+        "{} against {}",
+        low.f_bar,
+        default.f_bar
+    );
+    assert!(
+        low.l_k_bar > default.l_k_bar,
+        "{} against {}",
+        low.l_k_bar,
+        default.l_k_bar
+    );
+}

@@ -104,6 +104,19 @@ impl KnotKind {
 /// `max_force_bar` is not given (neither has an inversion, and their free
 /// tails keep their own length from the stopping rule `min_l_k_bar`).
 pub const BEND_TIGHT_FORCE_BAR: f64 = 0.05;
+/// F bar to which a bend's first pull tightens it with its tails held, to
+/// set it: half the default tight force, so that a bend that holds takes
+/// twice its setting load with its tails free.
+pub const BEND_SET_FORCE_BAR: f64 = 0.5 * BEND_TIGHT_FORCE_BAR;
+/// F bar to which a set bend is eased, its tails still held, before they
+/// are let go, when `eased_force_bar` is not given (a tenth of the setting
+/// load): a bend let go under a load it cannot hold slides apart at once,
+/// and its holding force would be read on that fall; let go nearly at rest,
+/// the pull that follows loads it up to what it holds. Not zero: an end that
+/// no longer pulls still drags its rod through the damping as it moves back.
+/// Easing moves every end back towards the knot, so a lower eased load also
+/// loosens the set bend more (docs/FIDELITY.md, Bends).
+pub const BEND_EASED_FORCE_BAR: f64 = 0.1 * BEND_SET_FORCE_BAR;
 /// F bar at which any other knot's tightening stops when `max_force_bar` is
 /// not given: its rod stretched by a quarter (strain F bar / 4, EA / EI = 4 /
 /// h^2), far past its linear elasticity. A knot that locks above
@@ -587,6 +600,40 @@ mod tests {
         let (field, reason) = refusal(short);
         assert_eq!(field, "length");
         assert!(reason.contains("needs a rod of at least"), "{reason}");
+    }
+
+    /// A set bend's eased load is a bend's alone and below its setting
+    /// load: given to another knot, or out of (0, setting load), it is
+    /// refused naming the field.
+    #[test]
+    fn the_eased_force_bar_belongs_to_a_bend() {
+        let field = |p: CaseParams| p.validate().err().map(|errors| errors[0].field.clone());
+        let reef = CaseParams {
+            knot: KnotKind::Reef,
+            ..CaseParams::default()
+        };
+        assert_eq!(reef.eased_force_bar(), BEND_EASED_FORCE_BAR);
+        let eased = |bar: f64, knot: KnotKind| CaseParams {
+            eased_force_bar: Some(bar),
+            knot,
+            ..reef.clone()
+        };
+        assert_eq!(field(eased(0.001, KnotKind::Reef)), None);
+        assert_eq!(eased(0.001, KnotKind::Fisherman).eased_force_bar(), 0.001);
+        for bad in [0.0, -0.001, BEND_SET_FORCE_BAR, 0.03] {
+            assert_eq!(
+                field(eased(bad, KnotKind::Reef)).as_deref(),
+                Some("eased_force_bar"),
+                "{bad}"
+            );
+        }
+        for other in [KnotKind::Overhand, KnotKind::FigureEight, KnotKind::CloveHitch] {
+            assert_eq!(
+                field(eased(0.001, other)).as_deref(),
+                Some("eased_force_bar"),
+                "{other}"
+            );
+        }
     }
 
     /// The clove hitch is tied on its cylinder, whose radius only it reads:

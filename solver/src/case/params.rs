@@ -2,8 +2,8 @@
 //! default, range, paper value and documentation, written once.
 use super::table::{Bound, Group, Parameter, Range, UNCHECKED, Value};
 use super::{
-    Candidates, ContactSolve, FieldError, FrictionLaw, Geometry, InitialShape, KnotKind, LoadStage,
-    MAX_NODES, MIN_RADIUS_DIVISOR, Protocol,
+    BEND_EASED_FORCE_BAR, BEND_SET_FORCE_BAR, Candidates, ContactSolve, FieldError, FrictionLaw, Geometry,
+    InitialShape, KnotKind, LoadStage, MAX_NODES, MIN_RADIUS_DIVISOR, Protocol,
 };
 use crate::knot::{
     self, BendSpec, BraidSpec, BraidWord, CloveHitchSpec, FigureEightSpec, Knot, KnotError, MAX_PASSES,
@@ -82,6 +82,9 @@ pub struct CaseParams {
     pub stop_after_inversion: Option<f64>,
     /// Stop above this F bar.
     pub max_force_bar: Option<f64>,
+    /// F bar to which a set bend is eased before its tails are let go;
+    /// `None`: [`BEND_EASED_FORCE_BAR`].
+    pub eased_force_bar: Option<f64>,
     /// The user's start shape (m), checked by [`InitialShape::checked`].
     pub initial_shape: Option<InitialShape>,
     /// The loading program; `None`: one tightening ([`super::default_program`]).
@@ -124,6 +127,7 @@ impl Default for CaseParams {
             min_l_k_bar: 60.0,
             stop_after_inversion: Some(10.0),
             max_force_bar: None,
+            eased_force_bar: None,
             initial_shape: None,
             loading: None,
         }
@@ -161,7 +165,7 @@ pub const PARAMETERS: &[Parameter] = &[
               the knot determinant |Delta(-1)| at every sample (docs/FIDELITY.md, a section per knot). The bends \
               \"reef\", \"granny\", \"thief\", \"grief\" and \"fisherman\" (two overhand knots, each round the \
               other rod) tie two rods of length L together, set them (the standing ends pulled apart to F bar \
-              0.025 with the tails held, then every end eased back to F bar 0.0025), let the tails go and pull \
+              0.025 with the tails held, then every end eased back to eased_force_bar, default F bar 0.0025), let the tails go and pull \
               the standing ends apart until tight (max_force_bar, default 0.05) or until the rods slip apart, and report whether the rods still hold each other and the holding force (the largest F bar \
               before they part), with l_k bar = (2L - the pulled clamps' distance) / h. \"clove_hitch\" ties the rod \
               round a rigid, fixed cylinder of radius cylinder_radius (frictional contact with the same mu), pulls \
@@ -601,6 +605,21 @@ pub const PARAMETERS: &[Parameter] = &[
         value: |p| p.max_force_bar.map(Value::Number),
     },
     Parameter {
+        name: "eased_force_bar",
+        group: Group::Loading,
+        unit: "",
+        default: "null",
+        range: Range::Interval(Bound::Open(0.0), Bound::Open(BEND_SET_FORCE_BAR)),
+        null: Some("0.0025, a tenth of the setting load, for a bend; no easing for the other knots"),
+        paper: "",
+        doc: "A bend's eased load: once set (F bar 0.025, its tails held) each of its four ends moves back towards \
+              the knot, for at most 10 radii, while it pulls harder than this F bar; then the tails are let go. \
+              Below the setting load; bends only (a hitch is eased to its tail's weight, F bar 0.005). Easing \
+              loosens the set knot as well as unloading it, so the holding force of a bend that comes apart \
+              soon after its release depends on it (docs/FIDELITY.md, Bends, \"Convergence\").",
+        value: |p| p.eased_force_bar.map(Value::Number),
+    },
+    Parameter {
         name: "initial_shape",
         group: Group::Knot,
         unit: "m",
@@ -723,6 +742,12 @@ impl CaseParams {
         }
     }
 
+    /// The F bar to which a set bend is eased before its tails are let go:
+    /// `eased_force_bar`, or [`BEND_EASED_FORCE_BAR`].
+    pub fn eased_force_bar(&self) -> f64 {
+        self.eased_force_bar.unwrap_or(BEND_EASED_FORCE_BAR)
+    }
+
     /// The radius of a hitch's cylinder: `cylinder_radius`, or
     /// [`knot::hitch::DEFAULT_RADIUS`] h.
     pub fn pole_radius(&self) -> f64 {
@@ -762,6 +787,14 @@ impl CaseParams {
             return Err(refuse(
                 "start_twist",
                 format!("knot \"{kind}\" lets its tail go once set, so no twist is held between clamps"),
+            ));
+        }
+        if kind.bend().is_none() && self.eased_force_bar.is_some() {
+            return Err(refuse(
+                "eased_force_bar",
+                format!(
+                    "eased_force_bar is a set bend's eased load; knot \"{kind}\" is no bend: leave it out"
+                ),
             ));
         }
         if kind != KnotKind::CloveHitch && self.cylinder_radius.is_some() {

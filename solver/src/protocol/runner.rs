@@ -4,7 +4,7 @@
 use super::adaptive::{Outcome, Phase, RELAX_DAMPING};
 use super::report::{BendSample, CaseReport, Event, PhaseSpan, Progress, QuasiStatic, Scaling, Status};
 use super::twist::{self, Tracker};
-use crate::case::{CaseParams, LoadStage, Scales, ValidCase};
+use crate::case::{BEND_SET_FORCE_BAR, CaseParams, LoadStage, Scales, ValidCase};
 use crate::contact::{Cylinder, GaussSeidelOptions};
 use crate::energies;
 use crate::external::{Environment, sliding};
@@ -20,10 +20,6 @@ use nalgebra::Vector3;
 use std::collections::VecDeque;
 use std::time::Instant;
 
-/// F bar to which a bend's first pull tightens it with its tails held, to
-/// set it: half the default tight force, so that a bend that holds takes
-/// twice its setting load with its tails free.
-pub const BEND_SET_FORCE_BAR: f64 = 0.5 * crate::case::BEND_TIGHT_FORCE_BAR;
 /// A bend's rods have come apart when no two of their segments are closer
 /// than 2h plus this many radii...
 pub(super) const PARTED: f64 = 0.5;
@@ -33,13 +29,6 @@ pub(super) const PARTED: f64 = 0.5;
 /// along the pull, within reach of each other; a tied one's bights hold
 /// their bends.
 pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
-/// F bar to which a set bend is eased, its tails still held, before they
-/// are let go (a tenth of the setting load): a bend let go under a load it
-/// cannot hold slides apart at once, and its holding force would be read on
-/// that fall; let go nearly at rest, the pull that follows loads it up to
-/// its holding force. Not zero: an end that no longer pulls still drags
-/// its rod through the damping as it moves back.
-pub const BEND_EASED_FORCE_BAR: f64 = 0.1 * BEND_SET_FORCE_BAR;
 /// The farthest (radii h) an end moves back while it is eased: a tail
 /// trapped in the knot by friction may pull harder than the eased load
 /// however far it goes.
@@ -276,7 +265,7 @@ pub(super) struct Carried {
 
 /// A bend's or a hitch's tails through its setting: held while it relaxes
 /// and its first pull tightens it to [`BEND_SET_FORCE_BAR`], held while the
-/// clamps ease it back to [`BEND_EASED_FORCE_BAR`] (a hitch to
+/// clamps ease it back to `eased_force_bar` (a hitch to
 /// [`HITCH_TAIL_FORCE_BAR`]), then let go (a knot tied by
 /// hand is set by pulling its four ends before its standing ends are
 /// loaded; a loose bend of elastic rods springs open when its tails are
@@ -431,7 +420,7 @@ impl<'a> Case<'a> {
 
     /// One step of the easing: each held end (a bend's standing ends and
     /// tails, a hitch's two ends) moves back towards the knot while it pulls
-    /// harder than [`BEND_EASED_FORCE_BAR`] (a hitch's:
+    /// harder than `eased_force_bar` ([`CaseParams::eased_force_bar`]; a hitch's:
     /// [`HITCH_TAIL_FORCE_BAR`]) and stays where it is once it pulls less (a
     /// tail held while the standing ends were pulled carries a load of its
     /// own, which easing the standing ends does not take off), for
@@ -450,7 +439,7 @@ impl<'a> Case<'a> {
         }
         let eased = match self.cylinder {
             Some(_) => HITCH_TAIL_FORCE_BAR,
-            None => BEND_EASED_FORCE_BAR,
+            None => self.params.eased_force_bar(),
         } * force_unit(self.params);
         let mut held = false;
         for (end, outward) in self.held_ends().into_iter().flatten() {

@@ -20,6 +20,15 @@ fn completed(params: &CaseParams) -> solver::protocol::CaseReport {
     report
 }
 
+/// The reef knot's case at friction `mu`, the other parameters the defaults.
+fn reef(mu: f64) -> CaseParams {
+    CaseParams {
+        knot: KnotKind::Reef,
+        mu,
+        ..CaseParams::default()
+    }
+}
+
 fn tie(bend: Bend) -> (BendSpec, StartShape) {
     let spec = BendSpec {
         bend,
@@ -355,13 +364,10 @@ fn the_sampling_does_not_move_where_a_bend_is_set_and_let_go() {
 #[test]
 fn the_adaptive_pull_reads_a_bends_holding_force_as_the_reference_pull() {
     let hold = |protocol| {
-        let params = CaseParams {
-            knot: KnotKind::Reef,
-            mu: 0.2,
+        let report = completed(&CaseParams {
             protocol,
-            ..CaseParams::default()
-        };
-        let report = completed(&params);
+            ..reef(0.2)
+        });
         assert_eq!(report.tied, Some(false), "the reef at mu = 0.2 comes undone");
         report.holding_force_bar.expect("a holding force")
     };
@@ -383,13 +389,10 @@ fn the_adaptive_pull_reads_a_bends_holding_force_as_the_reference_pull() {
 #[test]
 fn a_bend_is_let_go_at_the_eased_load_it_is_given() {
     let release = |eased_force_bar| {
-        let params = CaseParams {
-            knot: KnotKind::Reef,
-            mu: 0.2,
+        let report = completed(&CaseParams {
             eased_force_bar,
-            ..CaseParams::default()
-        };
-        let report = completed(&params);
+            ..reef(0.2)
+        });
         let freed = (report.bend_series.iter().position(|b| b.tails_free)).expect("the tails are let go");
         report.series[freed - 1]
     };

@@ -210,16 +210,14 @@ fn bend_cases_are_checked_naming_the_field() {
 }
 
 /// The reef knot pulled by its standing ends (mu = 0.2): the two clamps pull
-/// alike while they set the knot (within 1 % where F bar is above a tenth of
-/// the setting load) and the two rods, which a half turn swaps, hold the
-/// same energy at every sample where they hold any (within 2 % where a
-/// rod's energy is above a tenth of the largest); F bar is the clamps'
-/// mean throughout. The case completes with the rods parted or tight, its
-/// holding force the largest F bar with the tails free, which are let go
-/// once the set knot has been eased. (While the clamps ease back, F bar
-/// falling, and once the bend slides, at a few thousandths, the clamps
-/// differ by up to 3.5e-4 in F bar: several per cent of the small forces
-/// there.)
+/// alike at every sample, while they set the knot, while they ease it and
+/// once its tails are free (within 1 % where either pulls more than F bar
+/// 0.001, a twenty-fifth of the setting load), and the two rods, which a
+/// half turn swaps, hold the same energy at every sample where they hold any
+/// (within 2 % where a rod's energy is above a tenth of the largest); F bar
+/// is the clamps' mean throughout. The case completes with the rods parted
+/// or tight, its holding force the largest F bar with the tails free, which
+/// are let go once the set knot has been eased.
 #[test]
 fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
     let params = CaseParams {
@@ -244,25 +242,27 @@ fn the_reef_pulls_symmetrically_and_reports_its_holding_force() {
     let largest_energy = (report.bend_series.iter())
         .map(|b| b.energy_bar[0].max(b.energy_bar[1]))
         .fold(0.0, f64::max);
-    for (i, (s, b)) in report.series.iter().zip(&report.bend_series).enumerate() {
+    let (mut clamps, mut energies) = (0.0f64, 0.0f64);
+    for (s, b) in report.series.iter().zip(&report.bend_series) {
         let [f0, f1] = b.f_bar;
         assert!((0.5 * (f0 + f1) - s.f_bar).abs() <= 1e-9 * s.f_bar.abs() + 1e-12);
-        if i <= set && s.f_bar > 0.1 * setting {
-            assert!(
-                (f0 - f1).abs() <= 0.01 * f0.abs().max(f1.abs()),
-                "at {}: {f0} {f1}",
-                s.l_k_bar
-            );
+        if f0.abs().max(f1.abs()) > setting / 25.0 {
+            let apart = (f0 - f1).abs() / f0.abs().max(f1.abs());
+            assert!(apart <= 0.01, "at {}: {f0} {f1}", s.l_k_bar);
+            clamps = clamps.max(apart);
         }
         let [e0, e1] = b.energy_bar;
         if e0.max(e1) > 0.1 * largest_energy {
-            assert!(
-                (e0 - e1).abs() <= 0.02 * e0.max(e1),
-                "at {}: {e0} {e1}",
-                s.l_k_bar
-            );
+            let apart = (e0 - e1).abs() / e0.max(e1);
+            assert!(apart <= 0.02, "at {}: {e0} {e1}", s.l_k_bar);
+            energies = energies.max(apart);
         }
     }
+    eprintln!(
+        "the clamps' F bar within {:.2} %, the rods' energies within {:.2} %",
+        100.0 * clamps,
+        100.0 * energies
+    );
     let holding = report
         .holding_force_bar
         .expect("a bend reports its holding force");

@@ -411,3 +411,38 @@ fn a_bend_is_let_go_at_the_eased_load_it_is_given() {
         default.l_k_bar
     );
 }
+
+/// A bend that springs open flings its rods apart, still bending as they
+/// vibrate: the reef at mu = 0.2 is found parted at the first sample whose
+/// rods are nowhere within a diameter of each other, not once they have
+/// straightened (docs/FIDELITY.md, Left open). Checked against the final
+/// shape's node distances (a segment lies within half an edge of a node,
+/// so the rods' surfaces are at least the nodes' distance less an edge and
+/// 2h apart) and the rods' energies, above the straightness rule's 0.02
+/// EI / h when they are found parted.
+#[test]
+fn a_bend_flung_apart_is_parted_while_its_rods_still_bend() {
+    let params = reef(0.2);
+    let report = completed(&params);
+    assert_eq!(report.tied, Some(false));
+    let parted = (report.bend_series.iter().position(|b| b.apart)).expect("the rods part");
+    assert_eq!(parted + 1, report.series.len(), "the case ends where they part");
+    let [e0, e1] = report.bend_series[parted].energy_bar;
+    assert!(e0.max(e1) > 0.02, "still bending: {e0} {e1}");
+    let last = report.snapshots.last().expect("a final snapshot");
+    let split = last.rods[0];
+    let (h, edge) = (params.h, params.length / (last.rods[0] - 1) as f64);
+    let node = |p: &[f64; 3]| Vector3::from(*p);
+    let gap = (last.points[..split].iter())
+        .flat_map(|p| {
+            last.points[split..]
+                .iter()
+                .map(move |q| (node(p) - node(q)).norm())
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        gap - edge - 2.0 * h > 2.0 * h,
+        "surfaces {} h apart at most",
+        (gap - edge) / h - 2.0
+    );
+}

@@ -29,7 +29,7 @@ pub use table::{Bound, Group, Parameter, Range};
 /// defaults changes results, and part of every case's cache key, so that
 /// results computed under older physics are never served as current. What
 /// each revision changed, and why, is in CHANGELOG.md.
-pub const PHYSICS_REVISION: u32 = 22;
+pub const PHYSICS_REVISION: u32 = 23;
 
 /// How fast the clamps move along the pull (case parameter `protocol`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

@@ -203,8 +203,10 @@ pub struct BendSample {
     /// The rods have come apart: they neither touch (no two segments within
     /// half a radius of each other's surface) nor bend (each rod's elastic
     /// energy below 0.02 EI / h; rods with knots of their own, the
-    /// fisherman's, need only not touch); a hitch's rod wraps its cylinder
-    /// by less than one and a half turns.
+    /// fisherman's, need only not touch), or no two segments come within a
+    /// diameter of each other's surface however they bend (rods flung apart,
+    /// vibrating); a hitch's rod wraps its cylinder by less than one and a
+    /// half turns.
     pub apart: bool,
     /// The tails are free (the bend has set).
     pub tails_free: bool,

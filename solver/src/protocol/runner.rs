@@ -29,6 +29,12 @@ pub(super) const PARTED: f64 = 0.5;
 /// along the pull, within reach of each other; a tied one's bights hold
 /// their bends.
 pub(super) const PARTED_ENERGY_BAR: f64 = 0.02;
+/// ...or, whatever they bend, no two of their segments are closer than 2h
+/// plus this many radii: a tied bend's rods touch, while a bend that springs
+/// open flings its rods apart, vibrating (the reef at mu = 0.2 with K =
+/// 1201: hundreds of radii apart, each rod's elastic energy 0.017 to 0.071
+/// EI / h; docs/FIDELITY.md, Left open).
+pub(super) const PARTED_FAR: f64 = 2.0;
 /// The farthest (radii h) an end moves back while it is eased: a tail
 /// trapped in the knot by friction may pull harder than the eased load
 /// however far it goes.
@@ -879,10 +885,11 @@ impl<'a> Case<'a> {
         let apart = match &self.cylinder {
             Some(cylinder) => knot::wrap_turns(&positions[0], cylinder).abs() < HITCH_SLIPPED_TURNS,
             None => {
-                let near = knot::closest_approach(&positions, params.h, edge, PARTED * params.h, true);
+                let within =
+                    |radii: f64| knot::closest_approach(&positions, params.h, edge, radii * params.h, true);
                 // Rods with knots of their own bend however they lie.
                 let straight = self.own_knots || energy_bar.iter().all(|&e| e < PARTED_ENERGY_BAR);
-                near.is_none() && straight
+                within(PARTED).is_none() && (straight || within(PARTED_FAR).is_none())
             }
         };
         let spans = (self.own_knots).then(|| {

@@ -431,7 +431,7 @@ fn a_bend_flung_apart_is_parted_while_its_rods_still_bend() {
     assert!(e0.max(e1) > 0.02, "still bending: {e0} {e1}");
     let last = report.snapshots.last().expect("a final snapshot");
     let split = last.rods[0];
-    let (h, edge) = (params.h, params.length / (last.rods[0] - 1) as f64);
+    let (h, edge) = (params.h, params.length / (split - 1) as f64);
     let node = |p: &[f64; 3]| Vector3::from(*p);
     let gap = (last.points[..split].iter())
         .flat_map(|p| {

@@ -312,12 +312,7 @@ impl Case<'_> {
                 self.end_phase(Outcome::Confirmed);
                 self.enter(travel, Phase::After);
             }
-            (Phase::Snap, None)
-                if travel
-                    .fast_event
-                    .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM)))
-                    && self.fell_flat(travel) =>
-            {
+            (Phase::Snap, None) if self.alarm_passed(travel, arc) && self.fell_flat(travel) => {
                 // The loop fell flat without a snap the detector read: the
                 // restart came too close to the fold for the kinetic energy's
                 // baseline to settle. Go back further.
@@ -331,9 +326,7 @@ impl Case<'_> {
                 self.refute(travel, saved, l_k_bar);
             }
             (Phase::Snap | Phase::Fallback, None)
-                if travel
-                    .fast_event
-                    .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM))) =>
+                if self.alarm_passed(travel, arc) && !self.snap_pending(travel) =>
             {
                 self.refute(travel, saved, l_k_bar);
             }
@@ -358,6 +351,23 @@ impl Case<'_> {
         travel.watch_from = self.report.series.len();
         self.enter(travel, Phase::Approach);
         saved.next = l_k_bar;
+    }
+
+    /// Whether a slow phase has passed `FALSE_ALARM` beyond the fast pull's
+    /// event, at the knot's own length `arc`.
+    fn alarm_passed(&self, travel: &Travel, arc: f64) -> bool {
+        let way = travel.way;
+        travel
+            .fast_event
+            .is_some_and(|f| way.past(arc, way.on(f, FALSE_ALARM)))
+    }
+
+    /// Whether an overhand knot jumped in the last samples, a snap awaiting
+    /// the detector's confirmation ([`adaptive::jumped_lately`]): no refute
+    /// then, its jump having carried the knot's own length past the mark.
+    fn snap_pending(&self, travel: &Travel) -> bool {
+        let jump = self.criteria().knot_jump;
+        self.reads_loop() && adaptive::jumped_lately(travel.way, &self.report.series, jump)
     }
 
     /// Whether the slow phase through a bend's holding point sees its rods

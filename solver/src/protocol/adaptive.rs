@@ -587,6 +587,16 @@ mod tests {
         assert_eq!(loosen.restart_before(Some(6)), RELEASE_RESTART_BEFORE);
     }
 
+    /// A sample at `l_k_bar`, the knot's own length `l_k_arc_bar`, H bar `h_bar`.
+    fn at(l_k_bar: f64, l_k_arc_bar: f64, h_bar: f64) -> Sample {
+        Sample {
+            l_k_bar,
+            l_k_arc_bar,
+            h_bar,
+            ..Sample::default()
+        }
+    }
+
     /// The nylon line of L/h 5000, n = 2, mu = 0.5, pulled slowly through
     /// its snap (a fallback from the own length 91.13, a probe's retry:
     /// CHANGELOG.md, "No refute over a snap awaiting confirmation"): its knot jumps from
@@ -596,12 +606,6 @@ mod tests {
     /// jump is.
     #[test]
     fn a_jump_is_pending_until_the_detector_has_read_the_samples_after_it() {
-        let at = |l_k_bar: f64, l_k_arc_bar: f64, h_bar: f64| Sample {
-            l_k_bar,
-            l_k_arc_bar,
-            h_bar,
-            ..Sample::default()
-        };
         let measured = [
             at(-128.72, 86.78, 0.278),
             at(-129.22, 85.08, 0.261),
@@ -641,12 +645,6 @@ mod tests {
     /// 86.94 -> 82.11, H bar 0.278 -> 0.271) is none, nor is a release.
     #[test]
     fn a_knot_that_falls_through_its_fold_at_a_restart_jumped() {
-        let at = |l_k_bar: f64, l_k_arc_bar: f64, h_bar: f64| Sample {
-            l_k_bar,
-            l_k_arc_bar,
-            h_bar,
-            ..Sample::default()
-        };
         let (tighten, jump) = (
             Way(1.0),
             crate::measurements::InversionCriteria::default().knot_jump,
